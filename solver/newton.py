@@ -1,0 +1,92 @@
+"""Newton's method on the sparse KKT system, with optional reuse of the factorization.
+
+Failure is a value: :func:`newton` returns a :class:`NewtonResult` with ``converged``,
+``iterations`` and a message; non-finite residuals, a singular matrix or a contraction rate ≥ 1
+with a fresh Jacobian mean divergence (scipy ``radau.py::solve_collocation_system`` does the
+same). Reusing the LU factors of an earlier Jacobian (modified Newton) costs a few more, much
+cheaper, iterations; the factors are refreshed as soon as the contraction slows down.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse.linalg as spla
+from numpy.typing import NDArray
+
+NEWTON_MAXITER = 30  # Maximum number of Newton iterations per step.
+SLOW_RATE = 0.25  # Contraction rate above which stale LU factors are refreshed.
+
+
+@dataclass
+class NewtonResult:
+    x: NDArray[np.float64]
+    converged: bool
+    iterations: int
+    factorizations: int
+    message: str = ""
+
+
+class LinearSolver:
+    """Holds LU factors between calls so a later solve can reuse them."""
+
+    def __init__(self) -> None:
+        self.lu = None
+
+    def factor(self, mat) -> str | None:
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("error", spla.MatrixRankWarning)
+                self.lu = spla.splu(mat.tocsc(), permc_spec="COLAMD")
+        except (RuntimeError, spla.MatrixRankWarning) as exc:
+            self.lu = None
+            return (f"singular Newton matrix ({exc}); redundant or insufficient constraints, "
+                    "or a body with zero inertia whose rotation no joint fixes")
+        return None
+
+
+def newton(residual: Callable[[NDArray], NDArray], jacobian: Callable[[NDArray], object],
+           x0: NDArray, converged: Callable[[NDArray, NDArray], bool], solver: LinearSolver,
+           reuse: bool = True) -> NewtonResult:
+    """Solve residual(x) = 0 from x0.
+
+    ``converged(x, dx)`` decides convergence after each update; ``solver`` keeps LU factors
+    that are reused across calls when ``reuse`` is true.
+    """
+    x = x0.copy()
+    nfact = 0
+    fresh = False
+    if not reuse or solver.lu is None:
+        msg = solver.factor(jacobian(x))
+        nfact += 1
+        fresh = True
+        if msg:
+            return NewtonResult(x, False, 0, nfact, msg)
+    prev = np.inf
+    for it in range(1, NEWTON_MAXITER + 1):
+        r = residual(x)
+        if not np.all(np.isfinite(r)):
+            return NewtonResult(x, False, it, nfact, "non-finite residual (Newton diverged)")
+        dx = solver.lu.solve(-r)
+        if not np.all(np.isfinite(dx)):
+            return NewtonResult(x, False, it, nfact, "non-finite Newton update")
+        x += dx
+        size = float(np.abs(dx).max())
+        if converged(x, dx):
+            return NewtonResult(x, True, it, nfact)
+        rate = size / prev if np.isfinite(prev) and prev > 0 else 0.0
+        if rate > SLOW_RATE or (not fresh and it >= 4):
+            if fresh and rate >= 1.0 and it > 3:
+                return NewtonResult(x, False, it, nfact,
+                                    f"Newton diverged (contraction rate {rate:.2f} ≥ 1)")
+            msg = solver.factor(jacobian(x))
+            nfact += 1
+            fresh = True
+            if msg:
+                return NewtonResult(x, False, it, nfact, msg)
+        prev = size
+    return NewtonResult(x, False, NEWTON_MAXITER, nfact,
+                        f"Newton did not converge in {NEWTON_MAXITER} iterations")

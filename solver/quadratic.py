@@ -1,0 +1,174 @@
+"""Constraints that are at most quadratic in the unknowns, stored as one sparse 3-tensor.
+
+With directors, every lower-pair joint and every orthonormality condition is a sum of dot
+products of coordinate blocks: C_r(q, t) = Σ_e h_e w_e(t) q_i q_j + Σ_l g_l w_l(t) q_k + Σ c w(t).
+Storing all rows of all joints as flat entry arrays lets one vectorized numpy pass evaluate
+values, Jacobians and λ-weighted Hessians for every constraint at once; and because the
+Jacobian at the midpoint is the exact discrete derivative of a quadratic (∂C(q_m)·Δq =
+C(q_f) − C(q_i)), the energy-preserving scheme needs no special treatment for them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from solver.timefunctions import TimeFunction, constant
+
+
+@dataclass
+class VecExpr:
+    """A 3-vector linear in the unknowns: Σ coef·q[offset:offset+3] + const."""
+
+    terms: list[tuple[float, int]] = field(default_factory=list)
+    const: NDArray[np.float64] = field(default_factory=lambda: np.zeros(3))
+
+    def __add__(self, other: VecExpr) -> VecExpr:
+        return VecExpr(self.terms + other.terms, self.const + other.const)
+
+    def __sub__(self, other: VecExpr) -> VecExpr:
+        return self + other.scaled(-1.0)
+
+    def scaled(self, s: float) -> VecExpr:
+        return VecExpr([(s * c, o) for c, o in self.terms], s * self.const)
+
+    def value(self, q: NDArray[np.float64]) -> NDArray[np.float64]:
+        out = self.const.copy()
+        for c, o in self.terms:
+            out += c * q[o : o + 3]
+        return out
+
+
+class QuadraticBuilder:
+    """Collects quadratic constraint rows during model assembly."""
+
+    def __init__(self) -> None:
+        self.funcs: list[TimeFunction] = [constant(1.0)]
+        self._fid: dict[int, int] = {}
+        self.h: list[tuple[int, int, int, float, int]] = []  # row, i, j, h, fun
+        self.g: list[tuple[int, int, float, int]] = []  # row, k, g, fun
+        self.c: list[tuple[int, float, int]] = []  # row, c, fun
+        self.n_rows = 0
+
+    def fun(self, f: TimeFunction | None) -> int:
+        if f is None:
+            return 0
+        if id(f) not in self._fid:
+            self._fid[id(f)] = len(self.funcs)
+            self.funcs.append(f)
+        return self._fid[id(f)]
+
+    def new_rows(self, n: int) -> NDArray[np.int64]:
+        rows = np.arange(self.n_rows, self.n_rows + n)
+        self.n_rows += n
+        return rows
+
+    def add_dot(self, row: int, u: VecExpr, w: VecExpr, coef: float = 1.0,
+                f: TimeFunction | None = None) -> None:
+        """Add coef·f(t)·(u·w) to row ``row``."""
+        fid = self.fun(f)
+        for a, oa in u.terms:
+            for b, ob in w.terms:
+                for k in range(3):
+                    self.h.append((row, oa + k, ob + k, coef * a * b, fid))
+            for k in range(3):
+                if w.const[k] != 0.0:
+                    self.g.append((row, oa + k, coef * a * w.const[k], fid))
+        for b, ob in w.terms:
+            for k in range(3):
+                if u.const[k] != 0.0:
+                    self.g.append((row, ob + k, coef * b * u.const[k], fid))
+        cc = float(u.const @ w.const)
+        if cc != 0.0:
+            self.c.append((row, coef * cc, fid))
+
+    def add_vector(self, rows: NDArray[np.int64], u: VecExpr) -> None:
+        """Rows[k] += component k of u (a linear vector constraint)."""
+        for a, o in u.terms:
+            for k in range(3):
+                self.g.append((int(rows[k]), o + k, a, 0))
+        for k in range(3):
+            if u.const[k] != 0.0:
+                self.c.append((int(rows[k]), float(u.const[k]), 0))
+
+    def add_linear(self, row: int, index: int, coef: float, f: TimeFunction | None = None) -> None:
+        self.g.append((row, index, coef, self.fun(f)))
+
+    def add_constant(self, row: int, value: float, f: TimeFunction | None = None) -> None:
+        self.c.append((row, value, self.fun(f)))
+
+    def build(self) -> QuadraticConstraints:
+        return QuadraticConstraints(self)
+
+
+class QuadraticConstraints:
+    """Vectorized evaluation of all quadratic constraint rows."""
+
+    def __init__(self, b: QuadraticBuilder) -> None:
+        self.m = b.n_rows
+        self.funcs = b.funcs
+        h = np.array(b.h, dtype=float).reshape(-1, 5)
+        g = np.array(b.g, dtype=float).reshape(-1, 4)
+        c = np.array(b.c, dtype=float).reshape(-1, 3)
+        self.h_row, self.h_i, self.h_j = (h[:, k].astype(np.int64) for k in range(3))
+        self.h_val, self.h_fun = h[:, 3], h[:, 4].astype(np.int64)
+        self.g_row, self.g_k = g[:, 0].astype(np.int64), g[:, 1].astype(np.int64)
+        self.g_val, self.g_fun = g[:, 2], g[:, 3].astype(np.int64)
+        self.c_row, self.c_val, self.c_fun = c[:, 0].astype(np.int64), c[:, 1], c[:, 2].astype(int)
+        self.time_dependent = len(self.funcs) > 1
+        # Jacobian pattern: (row, i) with value h q_j, (row, j) with value h q_i, (row, k) with g.
+        self.jac_rows = np.concatenate([self.h_row, self.h_row, self.g_row])
+        self.jac_cols = np.concatenate([self.h_i, self.h_j, self.g_k])
+        # λ-weighted Hessian pattern: (i, j) and (j, i).
+        self.hess_rows = np.concatenate([self.h_i, self.h_j])
+        self.hess_cols = np.concatenate([self.h_j, self.h_i])
+        self._t_cache: float | None = None
+
+    def weights(self, t: float, order: int = 0) -> NDArray[np.float64]:
+        """Values (order 0), rates (1) or second derivatives (2) of the time functions."""
+        return np.array([f(t)[order] for f in self.funcs])
+
+    def _scaled(self, t: float, order: int = 0):
+        if not self.time_dependent:
+            if order == 0:
+                return self.h_val, self.g_val, self.c_val
+            z = np.zeros
+            return z(len(self.h_val)), z(len(self.g_val)), z(len(self.c_val))
+        w = self.weights(t, order)
+        return self.h_val * w[self.h_fun], self.g_val * w[self.g_fun], self.c_val * w[self.c_fun]
+
+    def value(self, q: NDArray[np.float64], t: float, order: int = 0) -> NDArray[np.float64]:
+        """C(q, t) (order 0) or its partial time derivatives ∂ⁿC/∂tⁿ at fixed q."""
+        h, g, c = self._scaled(t, order)
+        out = np.bincount(self.h_row, h * q[self.h_i] * q[self.h_j], minlength=self.m)
+        out += np.bincount(self.g_row, g * q[self.g_k], minlength=self.m)
+        out += np.bincount(self.c_row, c, minlength=self.m)
+        return out
+
+    def jacobian_values(self, q: NDArray[np.float64], t: float, order: int = 0):
+        """Values at the (jac_rows, jac_cols) pattern of ∂C/∂q (or of ∂/∂q ∂ⁿC/∂tⁿ)."""
+        h, g, _ = self._scaled(t, order)
+        return np.concatenate([h * q[self.h_j], h * q[self.h_i], g])
+
+    def hessian_values(self, lam: NDArray[np.float64], t: float) -> NDArray[np.float64]:
+        """Values at the (hess_rows, hess_cols) pattern of Σ_r λ_r ∂²C_r/∂q²."""
+        h, _, _ = self._scaled(t)
+        v = lam[self.h_row] * h
+        return np.concatenate([v, v])
+
+    def quadratic_rate_term(self, q, v, t) -> NDArray[np.float64]:
+        """C̈ − (∂C/∂q)·q̈ for a motion through (q, v) at time t (exact for these rows)."""
+        h0, g0, _ = self._scaled(t, 0)
+        out = np.bincount(self.h_row, 2 * h0 * v[self.h_i] * v[self.h_j], minlength=self.m)
+        if self.time_dependent:
+            h1, g1, _ = self._scaled(t, 1)
+            h2, g2, c2 = self._scaled(t, 2)
+            qq = q[self.h_i] * v[self.h_j] + v[self.h_i] * q[self.h_j]
+            out += np.bincount(self.h_row, 2 * h1 * qq + h2 * q[self.h_i] * q[self.h_j],
+                               minlength=self.m)
+            out += np.bincount(self.g_row, 2 * g1 * v[self.g_k] + g2 * q[self.g_k],
+                               minlength=self.m)
+            out += np.bincount(self.c_row, c2, minlength=self.m)
+        return out
