@@ -37,7 +37,7 @@ from solver.system import System
 
 Array = NDArray[np.float64]
 
-CONSTRAINT_TOL = 1e-12  # Newton stops when updates are below this (relative to the scale of q).
+CONSTRAINT_TOL = 1e-14  # Newton stops when updates are below this (relative to the scale of q).
 PROJECTION_MAXITER = 50  # Iterations allowed for the initial projection onto C(q) = 0.
 
 
@@ -98,6 +98,17 @@ class Integrator:
     def _solve(self) -> StepInfo:
         raise NotImplementedError
 
+    def _predict(self, default: Array) -> Array:
+        """Newton start for Δq: quadratic extrapolation of the last increments (error O(h³))."""
+        hist = getattr(self, "_dq_hist", ())
+        if len(hist) == 2:
+            return 2.0 * hist[1] - hist[0]
+        return default
+
+    def _history(self, dq: Array) -> None:
+        hist = getattr(self, "_dq_hist", ())
+        self._dq_hist = (*hist[-1:], dq.copy())
+
     def violation(self) -> float:
         """max |C(q, t)| over the holonomic rows."""
         c = self.sys.constraint(self.q, self.t)
@@ -147,7 +158,7 @@ class Midpoint(Integrator):
             am = s.nonholonomic_values(qm) if s.mn else np.zeros(0)
             return s.kkt(1.0, k, d, 0.5 * hq, 0.5 * hg, gbar, gf, am, am)
 
-        x0 = np.concatenate([h * vi, c * self.lam, c * self.nu])
+        x0 = np.concatenate([self._predict(h * vi), c * self.lam, c * self.nu])
         res = newton(residual, jacobian, x0, self._converged, self.lin, self.reuse)
         if not res.converged:
             return StepInfo(False, res.iterations, res.factorizations, res.message)
@@ -158,6 +169,7 @@ class Midpoint(Integrator):
         # work of drivers (constraint forces of prescribed motions) and of applied loads
         self.work += -float(lam @ s.gmul(gbar, dq)) + float(s.applied(qm, dq / h, tm) @ dq)
         self.q, self.v, self.t, self.lam, self.nu = qf, vf, tf, lam, nuv
+        self._history(dq)
         return StepInfo(True, res.iterations, res.factorizations)
 
 
@@ -226,7 +238,8 @@ class GeneralizedAlpha(Integrator):
             a_ = s.nonholonomic_values(qf) if s.mn else np.zeros(0)
             return s.kkt(1.0, k, d, hq, hg, gf, gf, a_, a_)
 
-        x0 = np.concatenate([h * vi + 0.5 * h * h * ai, sc * self.lam, sc * self.nu])
+        x0 = np.concatenate([self._predict(h * vi + 0.5 * h * h * ai), sc * self.lam,
+                             sc * self.nu])
         res = newton(residual, jacobian, x0, self._converged, self.lin, self.reuse)
         if not res.converged:
             return StepInfo(False, res.iterations, res.factorizations, res.message)
@@ -239,6 +252,7 @@ class GeneralizedAlpha(Integrator):
         self.work += -float(lam @ s.gmul(gm, dq)) + float(s.applied(qm, vm, ti + 0.5 * h) @ dq)
         self.q, self.v, self.t, self.lam, self.nu = qf, vf, tf, lam, nuv
         self.acc, self.qdd = anew, qdd
+        self._history(dq)
         return StepInfo(True, res.iterations, res.factorizations)
 
 

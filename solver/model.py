@@ -39,6 +39,8 @@ class Model:
                 self.forces.append(it)
             elif isinstance(it, Scalar):
                 self.scalars.append(it)
+            elif isinstance(it, (list, tuple)):
+                self.add(*it)
             elif isinstance(it, HolonomicGroup):
                 self.constraints.append(it)
                 self.scalars.extend(s for s in it.scalars() if s not in self.scalars)

@@ -75,9 +75,10 @@ def newton(residual: Callable[[NDArray], NDArray], jacobian: Callable[[NDArray],
             return NewtonResult(x, False, it, nfact, "non-finite Newton update")
         x += dx
         size = float(np.abs(dx).max())
-        if converged(x, dx):
-            return NewtonResult(x, True, it, nfact)
         rate = size / prev if np.isfinite(prev) and prev > 0 else 0.0
+        # converged, or stagnating at the roundoff floor (tiny updates that no longer shrink)
+        if converged(x, dx) or (rate > 0.5 and converged(x, dx * 1e-3)):
+            return NewtonResult(x, True, it, nfact)
         if rate > SLOW_RATE or (not fresh and it >= 4):
             if fresh and rate >= 1.0 and it > 3:
                 return NewtonResult(x, False, it, nfact,

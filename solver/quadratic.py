@@ -142,7 +142,8 @@ class QuadraticConstraints:
     def value(self, q: NDArray[np.float64], t: float, order: int = 0) -> NDArray[np.float64]:
         """C(q, t) (order 0) or its partial time derivatives ∂ⁿC/∂tⁿ at fixed q."""
         h, g, c = self._scaled(t, order)
-        out = np.bincount(self.h_row, h * q[self.h_i] * q[self.h_j], minlength=self.m)
+        out = np.zeros(self.m)
+        out += np.bincount(self.h_row, h * q[self.h_i] * q[self.h_j], minlength=self.m)
         out += np.bincount(self.g_row, g * q[self.g_k], minlength=self.m)
         out += np.bincount(self.c_row, c, minlength=self.m)
         return out
@@ -161,7 +162,8 @@ class QuadraticConstraints:
     def quadratic_rate_term(self, q, v, t) -> NDArray[np.float64]:
         """C̈ − (∂C/∂q)·q̈ for a motion through (q, v) at time t (exact for these rows)."""
         h0, g0, _ = self._scaled(t, 0)
-        out = np.bincount(self.h_row, 2 * h0 * v[self.h_i] * v[self.h_j], minlength=self.m)
+        out = np.zeros(self.m)
+        out += np.bincount(self.h_row, 2 * h0 * v[self.h_i] * v[self.h_j], minlength=self.m)
         if self.time_dependent:
             h1, g1, _ = self._scaled(t, 1)
             h2, g2, c2 = self._scaled(t, 2)

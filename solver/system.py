@@ -239,7 +239,7 @@ class System:
             GT: Array, G: Array, AT: Array, A: Array) -> sp.csc_matrix:
         """Assemble the Newton matrix from block values in pattern order."""
         data = np.concatenate([cM * self.M_vals, K, D, H, HG, GT, G, AT, A])
-        vals = np.bincount(self._scatter, data, minlength=self._nnz)
+        vals = np.bincount(self._scatter, data, minlength=self._nnz).astype(float)
         return sp.csc_matrix((vals, self._indices, self._indptr), shape=(self.N, self.N))
 
     # ------------------------------------------------------------------ physics kernels
@@ -309,6 +309,9 @@ class System:
         qm = 0.5 * (qi + qf)
         out = [self.quad.jacobian_values(qm, 0.5 * (ti + tf))]
         for g in self.groups:
+            if hasattr(g, "discrete_jacobian"):
+                out.append(g.discrete_jacobian(qi, qf).ravel())
+                continue
             ci, _ = g.evaluate(qi)
             cf, _ = g.evaluate(qf)
             _, gm = g.evaluate(qm)
@@ -335,16 +338,18 @@ class System:
 
     def gmul_T(self, vals: Array, lam: Array) -> Array:
         """Gᵀλ for Jacobian values in pattern order."""
-        return np.bincount(self.G_cols, vals * lam[self.G_rows], minlength=self.n)
+        return np.bincount(self.G_cols, vals * lam[self.G_rows], minlength=self.n).astype(float)
 
     def gmul(self, vals: Array, v: Array) -> Array:
-        return np.bincount(self.G_rows, vals * v[self.G_cols], minlength=self.mh)
+        return np.bincount(self.G_rows, vals * v[self.G_cols], minlength=self.mh).astype(float)
 
     def amul_T(self, vals: Array, nu: Array) -> Array:
-        return np.bincount(self.A_cols, vals * nu[self.A_rows - self.mh], minlength=self.n)
+        return np.bincount(self.A_cols, vals * nu[self.A_rows - self.mh],
+                           minlength=self.n).astype(float)
 
     def amul(self, vals: Array, v: Array) -> Array:
-        return np.bincount(self.A_rows - self.mh, vals * v[self.A_cols], minlength=self.mn)
+        return np.bincount(self.A_rows - self.mh, vals * v[self.A_cols],
+                           minlength=self.mn).astype(float)
 
     def constraint_rate(self, q: Array, t: float) -> Array:
         """∂C/∂t at fixed q (prescribed motions, driven joints)."""
