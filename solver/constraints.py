@@ -61,3 +61,8 @@ class NonholonomicGroup:
     def matrix(self, q: Array) -> Array:
         """Values (m, k) of A(q) at ``cols``."""
         raise NotImplementedError
+
+    def derivative(self, q: Array, dq: Array) -> Array:
+        """Values (m, k) of ∂(A(q)·dq)/∂q at ``cols`` (for exact Newton tangents); ``dq`` is
+        the full vector. Default: A independent of q."""
+        return np.zeros(self.cols.shape)

@@ -272,6 +272,11 @@ class ArcLength(NonholonomicGroup):
     def matrix(self, q: Array) -> Array:
         return np.array([[1.0, -float(self.joint.curve.speed(q[self.i_e]))]])
 
+    def derivative(self, q: Array, dq: Array) -> Array:
+        d = self.joint.curve.derivatives(q[self.i_e], 2)
+        sp = float(np.linalg.norm(d[1]))
+        return np.array([[0.0, -float(d[1] @ d[2]) / sp * dq[self.i_e]]])
+
 
 class Rolling(NonholonomicGroup):
     """Rolling without slip of a pin on a curve: ṡ + σ r (ω_pin − ω_link)·n = 0 (Eq. 5).
@@ -316,6 +321,32 @@ class Rolling(NonholonomicGroup):
         dl = q[self.ol + 3 : self.ol + 12].reshape(3, 3)
         n = self.axis @ dl
         k = 0.5 * self.side * self.r
-        row = np.concatenate([[1.0], (k * np.cross(n, dp)).ravel(),
-                              (-k * np.cross(n, dl)).ravel()])
+        row = np.empty(19)
+        row[0] = 1.0
+        row[1:10] = (k * _cross(n, dp)).ravel()
+        row[10:19] = (-k * _cross(n, dl)).ravel()
         return row[None, :]
+
+    def derivative(self, q: Array, dq: Array) -> Array:
+        # A·δ = δs + k Σ_α n·(d_α^P × δd_α^P) − k Σ_α n·(d_α^L × δd_α^L), n = Σ_β a_β d_β^L
+        dp = q[self.op + 3 : self.op + 12].reshape(3, 3)
+        dl = q[self.ol + 3 : self.ol + 12].reshape(3, 3)
+        ep = dq[self.op + 3 : self.op + 12].reshape(3, 3)
+        el = dq[self.ol + 3 : self.ol + 12].reshape(3, 3)
+        n = self.axis @ dl
+        k = 0.5 * self.side * self.r
+        w = (_cross(dp, ep) - _cross(dl, el)).sum(axis=0)  # ∂/∂n
+        row = np.zeros(19)
+        row[1:10] = (k * _cross(ep, n)).ravel()
+        row[10:19] = (-k * _cross(el, n)).ravel() + k * np.outer(self.axis, w).ravel()
+        return row[None, :]
+
+
+def _cross(a: Array, b: Array) -> Array:
+    """Cross product with broadcasting over leading axes (cheaper than np.cross for 3-vectors)."""
+    a, b = np.broadcast_arrays(a, b)
+    out = np.empty(a.shape)
+    out[..., 0] = a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1]
+    out[..., 1] = a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2]
+    out[..., 2] = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+    return out

@@ -156,7 +156,8 @@ class Midpoint(Integrator):
             gbar = s.discrete_jacobian_values(qi, qf, ti, tf)
             gf = s.jacobian_values(qf, tf)
             am = s.nonholonomic_values(qm) if s.mn else np.zeros(0)
-            return s.kkt(1.0, k, d, 0.5 * hq, 0.5 * hg, gbar, gf, am, am)
+            a31 = am + 0.5 * s.nonholonomic_derivative(qm, dq) if s.mn else am
+            return s.kkt(1.0, k, d, 0.5 * hq, 0.5 * hg, gbar, gf, am, a31)
 
         x0 = np.concatenate([self._predict(h * vi), c * self.lam, c * self.nu])
         res = newton(residual, jacobian, x0, self._converged, self.lin, self.reuse)
@@ -236,7 +237,8 @@ class GeneralizedAlpha(Integrator):
             hq, hg = s.hessian_values(qf, tf, mu)
             gf = s.jacobian_values(qf, tf)
             a_ = s.nonholonomic_values(qf) if s.mn else np.zeros(0)
-            return s.kkt(1.0, k, d, hq, hg, gf, gf, a_, a_)
+            a31 = a_ + (b * h / g) * s.nonholonomic_derivative(qf, vf) if s.mn else a_
+            return s.kkt(1.0, k, d, hq, hg, gf, gf, a_, a31)
 
         x0 = np.concatenate([self._predict(h * vi + 0.5 * h * h * ai), sc * self.lam,
                              sc * self.nu])

@@ -124,11 +124,16 @@ class QuadraticConstraints:
         # λ-weighted Hessian pattern: (i, j) and (j, i).
         self.hess_rows = np.concatenate([self.h_i, self.h_j])
         self.hess_cols = np.concatenate([self.h_j, self.h_i])
-        self._t_cache: float | None = None
+        self._w_cache: dict[float, NDArray[np.float64]] = {}
 
     def weights(self, t: float, order: int = 0) -> NDArray[np.float64]:
         """Values (order 0), rates (1) or second derivatives (2) of the time functions."""
-        return np.array([f(t)[order] for f in self.funcs])
+        w = self._w_cache.get(t)  # Newton evaluates many times at the same few instants
+        if w is None:
+            if len(self._w_cache) > 8:
+                self._w_cache.clear()
+            w = self._w_cache[t] = np.array([f(t) for f in self.funcs]).T
+        return w[order]
 
     def _scaled(self, t: float, order: int = 0):
         if not self.time_dependent:

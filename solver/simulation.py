@@ -31,7 +31,8 @@ class Simulation:
 def simulate(model, t_end: float, h: float, scheme: str = "ep", rho_inf: float | None = None,
              record_every: int = 1, reactions: bool = True,
              callback: Callable[[Integrator], None] | None = None,
-             reuse_jacobian: bool = True, system: System | None = None) -> Simulation:
+             reuse_jacobian: bool = True, system: System | None = None,
+             record_initial: bool = False) -> Simulation:
     """Integrate ``model`` from t = 0 to ``t_end`` (s) with step ``h`` (s).
 
     Parameters
@@ -44,7 +45,8 @@ def simulate(model, t_end: float, h: float, scheme: str = "ep", rho_inf: float |
         Store the configuration every this many steps (energy, work, violation and Newton
         iterations are stored every step).
     callback
-        Called with the integrator after every converged step (e.g. to record study outputs).
+        Called with the integrator after every converged step (e.g. to record study outputs),
+        and once before the first step if ``record_initial``.
 
     Returns
     -------
@@ -66,6 +68,8 @@ def simulate(model, t_end: float, h: float, scheme: str = "ep", rho_inf: float |
     viol = [integ.violation()]
     iters = [0]
     ok, msg = True, ""
+    if callback is not None and record_initial:
+        callback(integ)
     t0 = _time.perf_counter()
     for k in range(1, n_steps + 1):
         info = integ.step()

@@ -39,6 +39,7 @@ class System:
             self.offset[b] = n
             n += 3 if isinstance(b, PointMass) else 12
         self.scalar_index: dict = {}
+        self._block_end = n  # body coordinates come first, in 3-blocks
         for s in model.scalars:
             self.scalar_index[s] = n
             n += 1
@@ -330,6 +331,10 @@ class System:
     def nonholonomic_values(self, q: Array) -> Array:
         return _cat([g.matrix(q).ravel() for g in self.nh_groups], float)
 
+    def nonholonomic_derivative(self, q: Array, dq: Array) -> Array:
+        """Values of ∂(A(q)·dq)/∂q in the A pattern."""
+        return _cat([g.derivative(q, dq).ravel() for g in self.nh_groups], float)
+
     def nonholonomic_residual(self, q: Array, dq: Array) -> Array:
         out = []
         for g in self.nh_groups:
@@ -378,6 +383,14 @@ class System:
         return _cat(out, float)
 
     # ------------------------------------------------------------------ outputs
+    def angular_momentum(self, q: Array, v: Array) -> Array:
+        """Total angular momentum about the global origin (kg·m²/s): Σ over the coordinate
+        3-blocks of q_b × (M v)_b (x × m ẋ for positions, d_α × Σ_β E_αβ ḋ_β for directors)."""
+        nb = self._block_end // 3
+        qb = q[: self._block_end].reshape(nb, 3)
+        pb = (self.M @ v)[: self._block_end].reshape(nb, 3)
+        return np.cross(qb, pb).sum(axis=0)
+
     def directors(self, q: Array, body) -> Array:
         """Rotation matrix (columns d1, d2, d3) of a body at q."""
         o = self.offset[body]

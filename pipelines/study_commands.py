@@ -1,0 +1,278 @@
+"""`bifilar collar` and `bifilar pendulum`: single validation runs and the paper's figures."""
+
+from __future__ import annotations
+
+import os
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+from typing import Any
+
+import click
+import numpy as np
+import xarray as xr
+
+from studies.parameters import ParameterError
+
+
+def _fail(msg: str) -> None:
+    click.echo(f"error: {msg}", err=True)
+    raise SystemExit(2)
+
+
+def _write(ds: xr.Dataset, out: Path) -> None:
+    out.parent.mkdir(parents=True, exist_ok=True)
+    enc = {v: {"zlib": True, "complevel": 4} for v in ds.data_vars if ds[v].dtype.kind == "f"
+           and ds[v].ndim > 0}
+    attrs = {k: (int(v) if isinstance(v, bool) else v) for k, v in ds.attrs.items()}
+    ds = ds.assign_attrs(attrs)
+    tmp = out.with_name(out.name + ".tmp")
+    ds.to_netcdf(tmp, encoding=enc)
+    os.replace(tmp, out)
+
+
+def _pool_map(fn, items: list, workers: int) -> list:
+    if workers <= 1:
+        return [fn(i) for i in items]
+    with ProcessPoolExecutor(max_workers=workers) as ex:
+        return list(ex.map(fn, items))
+
+
+# ------------------------------------------------------------------------------- collar
+def _collar_case(params: dict[str, Any]) -> dict[str, float]:
+    from studies.collar import run
+
+    ds = run(params)
+    return {"period": float(ds.period), "period_analytic": float(ds.period_analytic),
+            "energy_error": float(np.abs(ds.energy_error).max()),
+            "violation": float(ds.constraint_violation.max())}
+
+
+def collar_figures(out_dir: Path, steps_per_period: int = 1000, workers: int = 2) -> list[Path]:
+    """Figs. 11 and 12: period against θ0 for both curves and both cases; PNG, PDF, netCDF."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from studies.collar import SPEC, analytic_period
+
+    out_dir.mkdir(parents=True, exist_ok=True)
+    thetas = np.arange(10.0, 81.0, 10.0)
+    curves, inertias = ("circle", "cycloid"), (0.0, 0.25)
+    jobs = [dict(curve=c, theta0=float(t), inertia=ip, steps_per_period=steps_per_period)
+            for ip in inertias for c in curves for t in thetas]
+    res = _pool_map(_collar_case, jobs, workers)
+    shape = (len(inertias), len(curves), len(thetas))
+    per = np.array([r["period"] for r in res]).reshape(shape)
+    ana = np.array([r["period_analytic"] for r in res]).reshape(shape)
+    table = xr.Dataset(
+        {"period": (("case", "curve", "theta0"), per, {"units": "s",
+                    "long_name": "period measured from the simulated motion"}),
+         "period_analytic": (("case", "curve", "theta0"), ana, {"units": "s",
+                             "long_name": "analytic period (Eqs. 8, 26, 27 with errata)"}),
+         "relative_error": (("case", "curve", "theta0"), per / ana - 1, {"units": "1",
+                            "long_name": "relative period error"})},
+        coords={"case": ("case", [1, 2], {"long_name": "1: Ip = 0, 2: Ip = 0.25 kg m2"}),
+                "curve": list(curves),
+                "theta0": ("theta0", thetas, {"units": "degree", "long_name": "release angle"})},
+        attrs={"title": "Collar on a circle and a cycloid (paper Figs. 11-12)",
+               "Conventions": "CF-1.11"})
+    paths = [out_dir / "collar_periods.nc"]
+    _write(table, paths[0])
+    fine = np.linspace(1.0, 89.0, 200)
+    for ci, (case, ip) in enumerate(zip((1, 2), inertias, strict=True)):
+        fig, ax = plt.subplots(figsize=(6.4, 4.4))
+        for k, (curve, style, mark) in enumerate(zip(curves, ("-", "--"), ("+", "o"),
+                                                     strict=True)):
+            th = fine if curve == "circle" else fine[fine < 89.5]
+            p0 = SPEC.complete({"curve": curve, "inertia": ip})
+            line = [analytic_period({**p0, "theta0": float(t)}) for t in th]
+            ax.plot(th, line, style, color="k", lw=1.2, label=f"{curve}: analytic")
+            ax.plot(thetas, per[ci, k], mark, color="C3" if k else "C0", ms=8, mfc="none",
+                    label=f"{curve}: multibody")
+        ax.set_xlabel("release angle θ0 (degree)")
+        ax.set_ylabel("period T (s)")
+        ax.set_title(f"Collar, case {case} (Ip = {ip:g} kg·m²)")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8)
+        fig.tight_layout()
+        for ext in ("png", "pdf"):
+            p = out_dir / f"collar_case{case}.{ext}"
+            fig.savefig(p, dpi=150)
+            paths.append(p)
+        plt.close(fig)
+    return paths
+
+
+@click.command()
+@click.option("--curve", type=click.Choice(["circle", "cycloid"]), help="curve shape")
+@click.option("--theta0", type=float, help="release tangent angle (degree)")
+@click.option("--mass", type=float, default=2.0, show_default=True, help="collar mass (kg)")
+@click.option("--radius", type=float, default=1.0, show_default=True, help="circle radius (m)")
+@click.option("--cycloid-a", "cycloid_a", type=float, default=0.25, show_default=True,
+              help="cycloid constant a (m)")
+@click.option("--inertia", type=float, default=0.0, show_default=True,
+              help="collar polar inertia Ip (kg m2); > 0 is case 2")
+@click.option("--gravity", type=float, default=9.81, show_default=True, help="g (m/s2)")
+@click.option("--scheme", type=click.Choice(["ep", "ed", "galpha"]), default="ep",
+              show_default=True)
+@click.option("--steps-per-period", "steps_per_period", type=int, default=1000,
+              show_default=True)
+@click.option("--periods", type=float, default=2.0, show_default=True)
+@click.option("--out", type=click.Path(dir_okay=False, path_type=Path),
+              help="netCDF file for the time histories")
+@click.option("--figures", type=click.Path(file_okay=False, path_type=Path),
+              help="reproduce Figs. 11 and 12 into this directory instead")
+def collar(curve, theta0, mass, radius, cycloid_a, inertia, gravity, scheme, steps_per_period,
+           periods, out, figures) -> None:
+    """The paper's validation: a collar sliding on a circle or a cycloid (Figs. 10-12)."""
+    if figures is not None:
+        for p in collar_figures(figures, steps_per_period):
+            click.echo(str(p))
+        return
+    missing = [n for n, v in (("--curve", curve), ("--theta0", theta0), ("--out", out))
+               if v is None]
+    if missing:
+        _fail(f"missing {', '.join(missing)} (or give --figures DIR)")
+    from studies.collar import SPEC
+
+    try:
+        params = SPEC.complete(dict(curve=curve, theta0=theta0, mass=mass, radius=radius,
+                                    cycloid_a=cycloid_a, inertia=inertia, gravity=gravity,
+                                    scheme=scheme, steps_per_period=steps_per_period,
+                                    periods=periods))
+        ds = SPEC.run(params)
+    except ParameterError as exc:
+        _fail(str(exc))
+    _write(ds, out)
+    if not ds.attrs["converged"]:
+        _fail(f"simulation failed: {ds.attrs['message']}")
+    click.echo(f"measured period  {float(ds.period):.9f} s")
+    click.echo(f"analytic period  {float(ds.period_analytic):.9f} s")
+    click.echo(f"relative error   {float(ds.period_error):.3e}")
+
+
+# ----------------------------------------------------------------------------- pendulum
+def _pendulum_case(params: dict[str, Any]) -> float:
+    from studies.bifilar import run
+
+    return float(run(params).frequency_order)
+
+
+def pendulum_figures(out_dir: Path, base: dict[str, Any], workers: int = 2) -> list[Path]:
+    """Frequency order against amplitude (0-40°) for circle, cycloid and epicycloid holes
+    tuned to the same small-amplitude order."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from studies.analytic import amplitude_frequency_ratio
+    from studies.bifilar import SPEC, holes_for
+
+    out_dir.mkdir(parents=True, exist_ok=True)
+    amps = np.array([1.0, 5.0, 10.0, 15.0, 20.0, 25.0, 30.0, 35.0, 40.0])
+    shapes = ("circle", "cycloid", "epicycloid")
+    jobs = [{**base, "hole": s, "amplitude": float(a), "hole_diameter": 0.0}
+            for s in shapes for a in amps]
+    orders = np.array(_pool_map(_pendulum_case, jobs, workers)).reshape(len(shapes), len(amps))
+    n_lin = holes_for(SPEC.complete({**base, "hole": "circle", "hole_diameter": 0.0}))
+    table = xr.Dataset(
+        {"frequency_order": (("hole", "amplitude"), orders, {"units": "1",
+                             "long_name": "ω/Ω measured from the free response"})},
+        coords={"hole": list(shapes),
+                "amplitude": ("amplitude", amps, {"units": "degree",
+                              "long_name": "release angle"})},
+        attrs={"title": "Bifilar tuning order against amplitude", "Conventions": "CF-1.11",
+               "frequency_order_linear": n_lin.order_linear})
+    paths = [out_dir / "pendulum_order.nc"]
+    _write(table, paths[0])
+    fig, ax = plt.subplots(figsize=(6.4, 4.4))
+    fine = np.linspace(0.0, 40.0, 200)
+    ax.plot(fine, [n_lin.order_linear * amplitude_frequency_ratio(np.radians(a))
+                   for a in fine], "k-", lw=1, label="circle: π/(2K(sin A/2)) × Eq. (7)")
+    for k, (s, m) in enumerate(zip(shapes, ("o", "s", "^"), strict=True)):
+        ax.plot(amps, orders[k], m + "--", color=f"C{k}", mfc="none", label=f"{s} holes")
+    ax.axhline(n_lin.order_linear, color="0.6", lw=0.8, ls=":")
+    ax.set_xlabel("amplitude (degree)")
+    ax.set_ylabel("tuning order ω/Ω")
+    ax.set_title(f"Bifilar tuned to {n_lin.order_linear:.3g}P at Ω = {base['hub_speed']:g} rad/s")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    for ext in ("png", "pdf"):
+        p = out_dir / f"pendulum_order.{ext}"
+        fig.savefig(p, dpi=150)
+        paths.append(p)
+    plt.close(fig)
+    return paths
+
+
+@click.command()
+@click.option("--hole", type=click.Choice(["circle", "cycloid", "epicycloid"]), default="circle",
+              show_default=True)
+@click.option("--hole-diameter", "hole_diameter", type=float, default=None,
+              help="circular hole diameter D (m); exclusive with --tuning-order")
+@click.option("--tuning-order", "tuning_order", type=float, default=None,
+              help="target small-amplitude order n (default 3)")
+@click.option("--hub-speed", "hub_speed", type=float, default=27.0, show_default=True,
+              help="rad/s")
+@click.option("--arm-radius", "arm_radius", type=float, default=0.40, show_default=True,
+              help="R0 (m)")
+@click.option("--cm-offset", "cm_offset", type=float, default=0.05, show_default=True,
+              help="Rm (m)")
+@click.option("--tuning-mass", "tuning_mass", type=float, default=13.6, show_default=True,
+              help="kg")
+@click.option("--pin-mass", "pin_mass", type=float, default=0.5, show_default=True,
+              help="per pin (kg)")
+@click.option("--pin-diameter", "pin_diameter", type=float, default=0.030, show_default=True,
+              help="m")
+@click.option("--pin-inertia", "pin_inertia", type=float, default=5.6e-5, show_default=True,
+              help="per pin (kg m2)")
+@click.option("--amplitude", type=float, default=None, help="release angle (degree)")
+@click.option("--periods", type=float, default=4.0, show_default=True)
+@click.option("--steps-per-period", "steps_per_period", type=int, default=400,
+              show_default=True)
+@click.option("--scheme", type=click.Choice(["ep", "ed", "galpha"]), default="ep",
+              show_default=True)
+@click.option("--out", type=click.Path(dir_okay=False, path_type=Path))
+@click.option("--figures", type=click.Path(file_okay=False, path_type=Path),
+              help="draw frequency order against amplitude for the three hole shapes")
+def pendulum(hole, hole_diameter, tuning_order, hub_speed, arm_radius, cm_offset, tuning_mass,
+             pin_mass, pin_diameter, pin_inertia, amplitude, periods, steps_per_period, scheme,
+             out, figures) -> None:
+    """One bifilar pendulum on a hub spinning at constant speed (Figs. 1, 5-7, Eq. 7)."""
+    from studies.bifilar import SPEC
+
+    if hole_diameter is not None and tuning_order is not None:
+        _fail("give either --hole-diameter or --tuning-order, not both")
+    given = dict(hole=hole, hub_speed=hub_speed, arm_radius=arm_radius, cm_offset=cm_offset,
+                 tuning_mass=tuning_mass, pin_mass=pin_mass, pin_diameter=pin_diameter,
+                 pin_inertia=pin_inertia, periods=periods, steps_per_period=steps_per_period,
+                 scheme=scheme)
+    if hole_diameter is not None:
+        if not hole_diameter > 0:
+            _fail(f"hole_diameter = {hole_diameter:g} m: must be > 0")
+        given["hole_diameter"] = hole_diameter
+    if tuning_order is not None:
+        given["tuning_order"] = tuning_order
+    try:
+        if figures is not None:
+            base = SPEC.complete({**given, "hole": "circle", "amplitude": 1.0})
+            for p in pendulum_figures(figures, base):
+                click.echo(str(p))
+            return
+        missing = [n for n, v in (("--amplitude", amplitude), ("--out", out)) if v is None]
+        if missing:
+            _fail(f"missing {', '.join(missing)} (or give --figures DIR)")
+        params = SPEC.complete({**given, "amplitude": amplitude})
+        ds = SPEC.run(params)
+    except ParameterError as exc:
+        _fail(str(exc))
+    _write(ds, out)
+    if not ds.attrs["converged"]:
+        _fail(f"simulation failed: {ds.attrs['message']}")
+    click.echo(f"tuning order measured   {float(ds.frequency_order):.6f}")
+    click.echo(f"tuning order linear     {float(ds.frequency_order_linear):.6f}")
+    click.echo(f"Jacobi integral change  {float(np.ptp(ds.jacobi.values) / abs(float(ds.jacobi[0]))):.2e} "
+               "(relative)")

@@ -1,0 +1,279 @@
+"""The bifilar pendulum on a spinning hub, built from basic joints as in the paper (Fig. 7).
+
+Multibody representation (one bifilar):
+
+* hub — spinning at Ω about z (a prescribed body here; a free rigid body in :mod:`studies.hub`);
+  it carries the support arm's tracking hole C1;
+* link1 — massless fictitious link: curve sliding joint on C1 with all three rotation
+  constraints (it carries the Frenet triad of C1 at the contact point A); the pin centre P is at
+  d/2 along its normal;
+* pin — the tuning pin's inner race: revolute joint to link1 at P (axis z); it carries the pins'
+  mass and polar inertia;
+* link2 — massless fictitious link: curve sliding joint (with rotation constraints) on the tuning
+  mass's hole C2; revolute joint to the pin at P;
+* tuning mass — a rigid body carrying C2, kept from rotating relative to the hub by one rotation
+  constraint about z (in the real device the second pin does this);
+* rolling ṡ1 = d/2·θ̇ and ṡ2 = d/2·γ̇ (Eq. 5) and the arc-length relations (Eq. 25).
+
+Why one pin: the two pins sit symmetrically about the radial line through the tuning mass's
+centre of mass and the tuning mass translates, so the two pins move identically apart from a
+constant offset ±c; their kinetic energies add and the ±c cross terms of their centrifugal
+potentials cancel. One pin carrying both pins' mass 2m_p and polar inertia 2I_p, on the radial
+line, is therefore exact (Eq. 7 with errata 5), and the constraint set has no redundancy:
+the pin chain fixes the tuning mass's out-of-plane motion and tilts, the z rotation lock its
+remaining rotation (3 + 2 + 1 in-plane unknowns, 2 rolling relations: one degree of freedom).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from solver.bodies import RigidBody, spinning
+from solver.curve_joints import ArcLength, CurveSliding, Rolling
+from solver.curves import NurbsCurve
+from solver.forces import RelativeRotation
+from solver.joints import Orientation, Revolute, Rigid
+from solver.model import Model
+from solver.rotations import rotation_about
+from solver.simulation import simulate
+from studies.holes import SHAPES, Geometry, Holes, design
+from studies.measure import period_from_crossings
+from studies.parameters import ModelSpec, Param, ParameterError
+
+Z = np.array([0.0, 0.0, 1.0])
+
+# A UH-60-class bifilar (no public source gives the hardware: these are assumptions, sized
+# so that Eq. (7) gives 3P at 27 rad/s with holes of a few centimetres, as the paper describes):
+# tuning mass 13.6 kg (30 lb) per bifilar; hole centre on the arm 0.40 m from the hub centre;
+# centre of mass 0.05 m outboard of the mass's hole centre; steel pins 30 mm in diameter,
+# 0.5 kg each (≈ 90 mm long), polar inertia ½ m r² = 5.6e-5 kg·m².
+PARAMETERS: dict[str, Param] = {
+    "hole": Param("circle", "1", "tracking hole shape", choices=SHAPES),
+    "hole_diameter": Param(0.0, "m", "circular hole diameter D (0: size from tuning_order)",
+                           minimum=0.0),
+    "tuning_order": Param(3.0, "1", "target small-amplitude tuning order n = ω/Ω",
+                          minimum=0.0, exclusive_minimum=True, maximum=50.0),
+    "hub_speed": Param(27.0, "rad s-1", "rotor speed Ω", minimum=0.0, exclusive_minimum=True),
+    "arm_radius": Param(0.40, "m", "R0: hub centre to the hole centre on the support arm",
+                        minimum=0.0, exclusive_minimum=True),
+    "cm_offset": Param(0.05, "m", "Rm: tuning mass hole centre to its centre of mass",
+                       minimum=0.0),
+    "tuning_mass": Param(13.6, "kg", "tuning mass m_b", minimum=0.0, exclusive_minimum=True),
+    "pin_mass": Param(0.5, "kg", "mass of one pin m_p", minimum=0.0),
+    "pin_diameter": Param(0.030, "m", "pin diameter d", minimum=0.0, exclusive_minimum=True),
+    "pin_inertia": Param(5.6e-5, "kg m2", "polar moment of inertia of one pin I_p",
+                         minimum=0.0),
+    "amplitude": Param(10.0, "degree", "release angle (pin angle φ for circles; turn of the "
+                       "path tangent from the vertex otherwise)", minimum=0.0, maximum=60.0),
+    "periods": Param(4.0, "1", "simulated duration in linear periods", minimum=1.0),
+    "steps_per_period": Param(400, "1", "time steps per linear period", minimum=16),
+    "scheme": Param("ep", "1", "time integration scheme", choices=("ep", "ed", "galpha")),
+    "pin_damping": Param(0.0, "N m s rad-1", "rolling resistance: torque per relative pin "
+                         "rotation rate", minimum=0.0),
+}
+
+
+def geometry(p: dict[str, Any]) -> Geometry:
+    return Geometry(p["arm_radius"], p["cm_offset"], p["pin_diameter"], p["tuning_mass"],
+                    p["pin_mass"], p["pin_inertia"])
+
+
+def holes_for(p: dict[str, Any]) -> Holes:
+    """The designed holes for a parameter set (validates the geometry)."""
+    if p["hole_diameter"] > 0:
+        return design(p["hole"], geometry(p), hole_diameter=p["hole_diameter"])
+    return design(p["hole"], geometry(p), tuning_order=p["tuning_order"])
+
+
+def check(p: dict[str, Any]) -> None:
+    holes_for(p)
+
+
+def _rotated(curve: NurbsCurve, q: np.ndarray) -> NurbsCurve:
+    """The same NURBS with its control points rotated by q (exact for rational curves)."""
+    return NurbsCurve(curve.degree, curve.knots, curve.control_points @ q.T, curve.weights,
+                      plane_normal=None if curve.plane_normal is None else q @ curve.plane_normal)
+
+
+@dataclass
+class BifilarParts:
+    """Handles to one bifilar's bodies and joints, for outputs."""
+
+    angle: float
+    holes: Holes
+    mass: RigidBody
+    pin: RigidBody
+    link1: RigidBody | None
+    joint1: CurveSliding | None
+    locked: bool
+
+
+def add_bifilar(model: Model, hub, holes: Holes, amplitude: float, angle: float = 0.0,
+                prefix: str = "", omega: float = 0.0, locked: bool = False,
+                pin_damping: float = 0.0, hub_center=(0.0, 0.0, 0.0)) -> BifilarParts:
+    """Add one bifilar to ``model`` on ``hub`` (whose frame is the identity at t = 0).
+
+    ``angle`` (rad) places the bifilar's radial line about z; ``amplitude`` (rad) is the release
+    angle; ``omega`` (rad/s) the hub speed for initial velocities (at rest relative to the hub);
+    ``locked`` clamps the tuning mass and the pins to the hub (the paper's case 0).
+    """
+    g = holes.geometry
+    q = rotation_about(Z, angle)
+    c0 = np.asarray(hub_center, dtype=float)
+    sig = holes.sigma_of_angle(amplitude)
+
+    def glob(p2):  # bifilar-frame 2-D point -> global 3-D
+        return c0 + q @ np.array([p2[0], p2[1], 0.0])
+
+    def vel(x):
+        return np.cross(omega * Z, x - c0)
+
+    w = omega * Z
+    cm = glob(holes.path(np.array([sig]))[0])
+    pin_c = glob(holes.pin_center(sig))
+    jp = 2.0 * g.pin_inertia
+    mass = RigidBody(f"{prefix}mass", g.tuning_mass, inertia=(0.0, 0.0, 0.0), position=cm,
+                     orientation=q, velocity=vel(cm), angular_velocity=w)
+    pin = RigidBody(f"{prefix}pin", 2.0 * g.pin_mass, inertia=(0.5 * jp, 0.5 * jp, jp),
+                    position=pin_c, orientation=q, velocity=vel(pin_c), angular_velocity=w)
+    if locked:
+        model.add(mass, pin, Rigid(f"{prefix}lock", hub, mass, point=cm),
+                  Rigid(f"{prefix}pinlock", hub, pin, point=pin_c))
+        return BifilarParts(angle, holes, mass, pin, None, None, True)
+    c1 = _rotated(holes.c1, q)
+    a1_loc = q @ np.array([*holes.hole_point(sig)[0], 0.0])
+    eta1 = c1.closest_eta(a1_loc)
+    a1 = c0 + c1.point(eta1)
+    r1 = c1.frame(eta1)[0]
+    # contact on the tuning mass's hole, in its frame (= the bifilar frame at t = 0)
+    b_loc = q.T @ (pin_c - cm) - 0.5 * g.pin_diameter * (q.T @ (pin_c - a1)) / (
+        0.5 * g.pin_diameter)
+    eta2 = holes.c2.closest_eta(b_loc)
+    a2 = cm + q @ holes.c2.point(eta2)
+    r2 = q @ holes.c2.frame(eta2)[0]
+    link1 = RigidBody(f"{prefix}link1", 0.0, position=a1, orientation=r1, velocity=vel(a1),
+                      angular_velocity=w)
+    link2 = RigidBody(f"{prefix}link2", 0.0, position=a2, orientation=r2, velocity=vel(a2),
+                      angular_velocity=w)
+    j1 = CurveSliding(f"{prefix}slide1", hub, c1, link1, point=a1, eta0=eta1, rotation=True)
+    j2 = CurveSliding(f"{prefix}slide2", mass, holes.c2, link2, point=a2, eta0=eta2,
+                      rotation=True)
+    arc1, arc2 = ArcLength(j1), ArcLength(j2)
+    rd = 0.5 * g.pin_diameter
+    model.add(mass, link1, pin, link2, j1, j2,
+              Revolute(f"{prefix}rev1", link1, pin, point=pin_c, axis=Z),
+              Revolute(f"{prefix}rev2", link2, pin, point=pin_c, axis=Z),
+              Orientation(f"{prefix}nospin", hub, mass, point=cm, axis=Z, axes=(2,)),
+              arc1, arc2,
+              Rolling(f"{prefix}roll1", arc1, pin, link1, rd, side=1),
+              Rolling(f"{prefix}roll2", arc2, pin, link2, rd, side=1))
+    if pin_damping > 0:
+        model.add(RelativeRotation(f"{prefix}rolling_resistance", link1, pin, axis=Z,
+                                   damping=pin_damping))
+    return BifilarParts(angle, holes, mass, pin, link1, j1, False)
+
+
+def pin_angle(system, parts: BifilarParts, hub, q: np.ndarray) -> float:
+    """Release-angle measure (rad): the turn of the arm hole's tangent at the contact point
+    relative to the vertex tangent, in the hub frame (for circular holes: the pin angle φ)."""
+    rh = system.directors(q, hub)
+    t = rh.T @ system.directors(q, parts.link1)[:, 0]
+    qa = rotation_about(Z, parts.angle)
+    t = qa.T @ t
+    return float(np.arctan2(-t[0], t[1]))
+
+
+def build(p: dict[str, Any]):
+    """Hub spinning at Ω (prescribed) with one bifilar released at the given amplitude."""
+    holes = holes_for(p)
+    model = Model()
+    hub = spinning("hub", p["hub_speed"])
+    model.add(hub)
+    parts = add_bifilar(model, hub, holes, np.radians(p["amplitude"]), omega=p["hub_speed"],
+                        pin_damping=p["pin_damping"])
+    return model, hub, parts
+
+
+def run(params: dict[str, Any]) -> xr.Dataset:
+    """Simulate the free response and measure the tuning order ω/Ω."""
+    from solver.system import System
+
+    p = SPEC.complete(params)
+    model, hub, parts = build(p)
+    omega = p["hub_speed"]
+    order_lin = parts.holes.order_linear
+    t_lin = 2 * np.pi / (order_lin * omega)
+    h = t_lin / p["steps_per_period"]
+    sysm = System(model)
+    # The midpoint rule turns the hub by Δψ with 2 tan(Δψ/2) = Ω̃ h per step in Cayley form,
+    # so the integral it conserves exactly is T + V − Ω̃ L_z with Ω̃ = 2 tan(Ω h/2)/h
+    # (→ Ω as h → 0; the difference is (Ωh)²/12 relative).
+    omega_j = 2.0 * np.tan(0.5 * omega * h) / h if p["scheme"] == "ep" else omega
+    rec: dict[str, list] = {k: [] for k in ("t", "phi", "x", "y", "jacobi", "roll", "viol")}
+    prev = {"q": None}
+
+    def record(integ):
+        q, v = integ.q, integ.v
+        rec["t"].append(integ.t)
+        rec["phi"].append(pin_angle(sysm, parts, hub, q))
+        rh = sysm.directors(q, hub)
+        xm = rh.T @ q[sysm.offset[parts.mass] : sysm.offset[parts.mass] + 3]
+        rec["x"].append(xm[0])
+        rec["y"].append(xm[1])
+        lz = sysm.angular_momentum(q, v)[2]
+        rec["jacobi"].append(sysm.kinetic(v) + sysm.potential(q) - omega_j * lz)
+        if prev["q"] is not None:
+            dq = q - prev["q"]
+            rec["roll"].append(sysm.nonholonomic_residual(prev["q"] + 0.5 * dq, dq) / integ.h)
+        else:
+            rec["roll"].append(np.zeros(sysm.mn))
+        rec["viol"].append(integ.violation())
+        prev["q"] = q.copy()
+
+    sim = simulate(model, p["periods"] * t_lin, h, scheme=p["scheme"], reactions=False,
+                   record_every=10**9, system=sysm, callback=record, record_initial=True)
+    t = np.array(rec["t"])
+    phi = np.degrees(np.array(rec["phi"]))
+    period = period_from_crossings(t, phi, center=0.0) if sim.converged else float("nan")
+    out = xr.Dataset(coords={"time": ("time", t, {"units": "s", "long_name": "time"})})
+    out["pin_angle"] = ("time", phi, {"units": "degree", "long_name": "pin angle (turn of the "
+                                      "hole tangent at the contact from the vertex)"})
+    out["mass_x"] = ("time", np.array(rec["x"]), {"units": "m", "long_name": "tuning mass "
+                                                   "centre of mass, hub frame, radial"})
+    out["mass_y"] = ("time", np.array(rec["y"]), {"units": "m", "long_name": "tuning mass "
+                                                   "centre of mass, hub frame, tangential"})
+    jac = np.array(rec["jacobi"])
+    out["jacobi"] = ("time", jac, {"units": "J", "long_name": "Jacobi integral T + V − Ω L_z "
+                                   "(energy in the rotating frame; Ω̃ = 2tan(Ωh/2)/h for ep)"})
+    roll = np.array(rec["roll"])
+    out = out.assign_coords(relation=[g.name for g in sysm.nh_groups])
+    out["rolling_residual"] = (("time", "relation"), roll, {
+        "units": "m s-1", "long_name": "discrete residual A(q_m)(q_f − q_i)/h of the rolling "
+        "and arc-length relations"})
+    out["constraint_violation"] = ("time", np.array(rec["viol"]), {
+        "units": "1", "long_name": "max |C| over holonomic constraints (pins on both curves)"})
+    order = 2 * np.pi / period / omega if np.isfinite(period) else float("nan")
+    out["frequency_order"] = ((), order, {"units": "1", "long_name": "ω/Ω measured from the "
+                                          "free response in the rotating frame"})
+    out["frequency_order_linear"] = ((), order_lin, {"units": "1", "long_name": "small-amplitude"
+                                                     " order, Eq. (7)"})
+    out.attrs.update({k: v for k, v in p.items()})
+    out.attrs.update({f"hole_{k}": float(v) for k, v in parts.holes.params.items()})
+    out.attrs.update(converged=int(sim.converged), message=sim.message,
+                     solver_seconds=sim.seconds, time_step=h)
+    return out
+
+
+def _check_params(p: dict[str, Any]) -> None:
+    if p["hole_diameter"] > 0 and p["hole"] != "circle":
+        raise ParameterError("hole_diameter applies to circular holes; give tuning_order for "
+                             f"hole = {p['hole']!r}")
+    check(p)
+
+
+SPEC = ModelSpec("pendulum", PARAMETERS, run, _check_params,
+                 description="one bifilar pendulum on a hub spinning at constant speed")
