@@ -31,7 +31,7 @@ Array = NDArray[np.float64]
 _PAIRS = {0: (2, 1), 1: (0, 2), 2: (1, 0)}  # rotation about t, n, b (Eq. 22 rows)
 
 
-class CurveSliding(HolonomicGroup):
+class CurveSliding:
     """Curve sliding joint between the curve of ``body_k`` and a point of ``body_l``.
 
     Parameters
@@ -41,8 +41,7 @@ class CurveSliding(HolonomicGroup):
     body_k
         Body carrying the curve (rigid or prescribed).
     curve
-        :class:`solver.curves.NurbsCurve` with points in body k's frame (m), relative to body
-        k's reference point (its centre of mass).
+        :class:`solver.curves.NurbsCurve`, points in m.
     body_l
         Body sliding on the curve.
     point
@@ -53,37 +52,63 @@ class CurveSliding(HolonomicGroup):
     rotation
         Which relative rotations to lock to the Frenet triad: a tuple of 0 (about t), 1
         (about n), 2 (about b); ``True`` for all three, ``False``/() for none.
+    placement
+        Rotation matrix Q and offset o (m) placing the curve in body k's frame:
+        p*(η) = o + Q p(η). Joints that share one curve object with different placements (the
+        holes of several bifilars) are evaluated together, vectorized.
+
+    The joints of a model are evaluated in batches (:class:`CurveSlidingSet`), one per curve
+    object, rotation set and kind of body ℓ.
     """
 
     def __init__(self, name: str, body_k: Body, curve, body_l: Body,
                  point: ArrayLike | None = None, eta0: float | None = None,
-                 rotation: bool | tuple[int, ...] = False) -> None:
+                 rotation: bool | tuple[int, ...] = False,
+                 placement: tuple[ArrayLike, ArrayLike] | None = None) -> None:
         self.name = name
         self.body_k, self.curve, self.body_l = body_k, curve, body_l
         if isinstance(body_k, PointMass):
             raise ValueError(f"curve joint {name!r}: the curve must be carried by a body with "
-                             "orientation, not point mass {body_k.name!r}")
+                             f"orientation, not point mass {body_k.name!r}")
         self.rot = (0, 1, 2) if rotation is True else tuple(rotation or ())
         if self.rot and isinstance(body_l, PointMass):
             raise ValueError(f"curve joint {name!r}: rotation constraints need a rigid body_l, "
                              f"{body_l.name!r} is a point mass")
         self._point = None if point is None else np.asarray(point, dtype=float)
         self._eta0 = eta0
+        if placement is None:
+            self.Q, self.o = np.eye(3), np.zeros(3)
+        else:
+            self.Q = np.asarray(placement[0], dtype=float)
+            self.o = np.asarray(placement[1], dtype=float)
         self.eta = Scalar(f"{name}.eta", 0.0, units="1", long_name="curve parameter")
 
     def scalars(self) -> list:
         return [self.eta]
 
-    def setup(self, s) -> None:
+    def key(self) -> tuple:
+        return (id(self.curve), self.rot, isinstance(self.body_l, PointMass))
+
+    def local_point(self, eta) -> Array:
+        """p*(η): the curve point in body k's frame (m)."""
+        return self.o + self.curve.point(eta) @ self.Q.T
+
+    def local_frame(self, eta) -> Array:
+        """Frenet triad (columns t, n, b) in body k's frame."""
+        return self.Q @ self.curve.frame(eta)[0]
+
+    def prepare(self, s) -> float:
+        """Initial η and the point of body ℓ (called by the batch's setup)."""
         k, l_ = self.body_k, self.body_l
         xk0, rk0 = s._pose0(k)
         xl0, rl0 = s._pose0(l_)
         p_glob = xl0 if self._point is None else self._point
         p_loc_k = rk0.T @ (p_glob - xk0)
-        eta0 = self.curve.closest_eta(p_loc_k) if self._eta0 is None else float(self._eta0)
+        p_curve = self.Q.T @ (p_loc_k - self.o)
+        eta0 = self.curve.closest_eta(p_curve) if self._eta0 is None else float(self._eta0)
         if not 0.0 <= eta0 <= 1.0:
             raise ValueError(f"curve joint {self.name!r}: eta0 = {eta0!r} outside [0, 1]")
-        gap = np.linalg.norm(self.curve.point(eta0) - p_loc_k)
+        gap = np.linalg.norm(self.local_point(eta0) - p_loc_k)
         scale = max(1.0, float(np.abs(self.curve.control_points).max()))
         if gap > 1e-6 * scale:
             raise ValueError(f"curve joint {self.name!r}: the point {p_glob.tolist()} of "
@@ -91,30 +116,58 @@ class CurveSliding(HolonomicGroup):
         self.eta.initial = eta0
         s.q0_raw[s.scalar_index[self.eta]] = eta0
         self.b = s.to_local_point(l_, p_glob)
-        ok, ol = s.offset[k], s.offset[l_]
-        self.ok, self.ol = ok, ol
-        self.l_rigid = not isinstance(l_, PointMass)
-        self.ie = s.scalar_index[self.eta]
-        cols = list(range(ok, ok + 12)) + list(range(ol, ol + (12 if self.l_rigid else 3)))
-        cols.append(self.ie)
-        self.nc = len(cols)
-        m = 3 + len(self.rot)
-        self.cols = np.tile(np.array(cols, dtype=np.int64), (m, 1))
-        r_star0, _ = self.curve.frame(eta0)
         # Frenet triad at η0 expressed in body ℓ's frame (columns t, n, b)
-        self.c = rl0.T @ rk0 @ r_star0
-        # local column offsets
-        self.xl = 12
-        self.dl = 15
-        self.je = self.nc - 1
-        # Jacobian template: the constant blocks of the displacement rows
+        self.c = rl0.T @ rk0 @ self.local_frame(eta0)
+        return eta0
+
+    def frenet(self, s, q: Array) -> Array:
+        """Frenet triad (columns t, n, b) at the contact point, global frame."""
+        eta = q[s.scalar_index[self.eta]]
+        ok = s.offset[self.body_k]
+        dk = q[ok + 3 : ok + 12].reshape(3, 3)
+        return dk.T @ self.local_frame(eta)
+
+
+class CurveSlidingSet(HolonomicGroup):
+    """All curve sliding joints that share one curve, rotation set and kind of body ℓ,
+    evaluated together: one curve evaluation and a few einsums per call for J joints."""
+
+    def __init__(self, joints: list[CurveSliding]) -> None:
+        self.joints = joints
+        self.name = ",".join(j.name for j in joints)
+        self.curve = joints[0].curve
+        self.rot = joints[0].rot
+        self.l_rigid = not isinstance(joints[0].body_l, PointMass)
+
+    def setup(self, s) -> None:
+        js = self.joints
+        for j in js:
+            j.prepare(s)
+        nj = len(js)
+        self.nj = nj
+        self.ok = np.array([s.offset[j.body_k] for j in js])
+        self.ol = np.array([s.offset[j.body_l] for j in js])
+        self.ie = np.array([s.scalar_index[j.eta] for j in js])
+        self.Q = np.array([j.Q for j in js])
+        self.o = np.array([j.o for j in js])
+        self.b = np.array([j.b for j in js])
+        self.c = np.array([j.c for j in js])
+        nl = 12 if self.l_rigid else 3
+        cols = np.concatenate([self.ok[:, None] + np.arange(12), self.ol[:, None] + np.arange(nl),
+                               self.ie[:, None]], axis=1)
+        self.nc = cols.shape[1]
+        self.mj = 3 + len(self.rot)
+        self.cols = np.repeat(cols, self.mj, axis=0)  # (J·m, nc)
+        self._cols_j = cols
+        self.xl, self.dl, self.je = 12, 15, self.nc - 1
         eye = np.eye(3)
-        g0 = np.zeros((m, self.nc))
-        g0[:3, 0:3] = eye
-        g0[:3, self.xl : self.xl + 3] = -eye
+        g0 = np.zeros((nj, self.mj, self.nc))
+        g0[:, :3, 0:3] = eye
+        g0[:, :3, self.xl : self.xl + 3] = -eye
         if self.l_rigid:
             for a in range(3):
-                g0[:3, self.dl + 3 * a : self.dl + 3 + 3 * a] = -self.b[a] * eye
+                g0[:, :3, self.dl + 3 * a : self.dl + 3 + 3 * a] = (
+                    -self.b[:, a, None, None] * eye)
         self._g0 = g0
         self._pr = np.tile(np.arange(3), 3)  # rows/cols of the p*_α I blocks
         self._pc = 3 + np.arange(9)
@@ -122,18 +175,42 @@ class CurveSliding(HolonomicGroup):
         self._rb = np.array([_PAIRS[x][1] for x in self.rot], dtype=np.int64)
         self._memo_curve: dict = {}
         self._memo_eval: dict = {}
-        # Hessian pattern: dense over the local columns (small: ≤ 25 × 25)
-        self.hess_rows = np.repeat(self.cols[0], self.nc)
-        self.hess_cols = np.tile(self.cols[0], self.nc)
+        self.hess_rows = np.concatenate([np.repeat(c, self.nc) for c in cols])
+        self.hess_cols = np.concatenate([np.tile(c, self.nc) for c in cols])
+        # W[j, r, β, γ] = R*_βa c_γb − R*_βb c_γa needs R*; precompute c columns per row
+        self._cb = self.c[:, :, self._rb]  # (J, 3, r): c_γ b_r
+        self._ca = self.c[:, :, self._ra]
 
-    def _curve(self, eta: float):
-        """Curve point, derivatives and Frenet frame at η, memoized (Newton revisits η)."""
-        key = float(eta)
+    @property
+    def m(self) -> int:
+        return self.nj * self.mj
+
+    def _curve_state(self, eta: Array):
+        """p*, p*', p*'' (J, 3) and R*, dR*/dη (J, 3, 3) in body k frames, memoized."""
+        key = eta.tobytes()
         hit = self._memo_curve.get(key)
         if hit is None:
-            d = self.curve.derivatives(key, 2)
-            rs, drs = self.curve.frame(key) if self.rot else (None, None)
-            hit = (d[0], d[1], d[2], rs, drs)
+            d = self.curve.derivatives(eta, 2)  # (3, J, 3)
+            qt = np.transpose(self.Q, (0, 2, 1))
+            p = self.o + np.einsum("ja,jab->jb", d[0], qt)
+            p1 = np.einsum("ja,jab->jb", d[1], qt)
+            p2 = np.einsum("ja,jab->jb", d[2], qt)
+            if self.rot and self.curve.plane_normal is not None:
+                # planar frame from the derivatives at hand (solver.curves convention):
+                # t = p'/|p'|, b = plane normal, n = b × t, t' = (p'' − t(t·p''))/|p'|
+                sp_ = np.linalg.norm(d[1], axis=-1, keepdims=True)
+                t = d[1] / sp_
+                bn = np.broadcast_to(self.curve.plane_normal, t.shape)
+                tp = (d[2] - t * np.sum(t * d[2], axis=-1, keepdims=True)) / sp_
+                r = np.stack([t, _cross(bn, t), bn], axis=-1)
+                dr = np.stack([tp, _cross(bn, tp), np.zeros_like(tp)], axis=-1)
+                r, dr = self.Q @ r, self.Q @ dr
+            elif self.rot:
+                r, dr = self.curve.frame(eta)
+                r, dr = self.Q @ r, self.Q @ dr
+            else:
+                r = dr = None
+            hit = (p, p1, p2, r, dr)
             if len(self._memo_curve) > 16:
                 self._memo_curve.clear()
             self._memo_curve[key] = hit
@@ -141,116 +218,130 @@ class CurveSliding(HolonomicGroup):
 
     def _state(self, q: Array):
         eta = q[self.ie]
-        p, p1, p2, rs, drs = self._curve(eta)
-        dk = q[self.ok + 3 : self.ok + 12].reshape(3, 3)  # rows d1, d2, d3
-        dl = q[self.ol + 3 : self.ol + 12].reshape(3, 3) if self.l_rigid else None
-        return eta, p, p1, p2, rs, drs, dk, dl
+        p, p1, p2, r, dr = self._curve_state(eta)
+        dk = q[self.ok[:, None] + 3 + np.arange(9)].reshape(-1, 3, 3)  # rows d1, d2, d3
+        dl = (q[self.ol[:, None] + 3 + np.arange(9)].reshape(-1, 3, 3) if self.l_rigid
+              else None)
+        return eta, p, p1, p2, r, dr, dk, dl
+
+    def _w(self, r: Array) -> Array:
+        """W[j, r, β, γ] = R*_βa c_γb − R*_βb c_γa of the rotation rows (Eq. 23 bilinear form)."""
+        a, b = self._ra, self._rb
+        return (np.einsum("jbr,jgr->jrbg", r[:, :, a], self._cb)
+                - np.einsum("jbr,jgr->jrbg", r[:, :, b], self._ca))
 
     def evaluate(self, q: Array) -> tuple[Array, Array]:
-        key = q[self.cols[0]].tobytes()
+        key = q[self._cols_j].tobytes()
         hit = self._memo_eval.get(key)
         if hit is not None:
             return hit
-        eta, p, p1, _, rs, drs, dk, dl = self._state(q)
-        m = 3 + len(self.rot)
-        c = np.empty(m)
+        eta, p, p1, _, r, dr, dk, dl = self._state(q)
+        nj, mj = self.nj, self.mj
+        c = np.empty((nj, mj))
         g = self._g0.copy()
-        xk, xl = q[self.ok : self.ok + 3], q[self.ol : self.ol + 3]
-        # displacement constraints, Eq. (11): constant blocks are in the template _g0
-        c[:3] = xk + p @ dk - xl - (self.b @ dl if self.l_rigid else 0.0)
-        g[self._pr, self._pc] = np.repeat(p, 3)  # ∂/∂d_α^k = p*_α I
-        g[:3, self.je] = p1 @ dk
+        xk = q[self.ok[:, None] + np.arange(3)]
+        xl = q[self.ol[:, None] + np.arange(3)]
+        # displacement constraints, Eq. (11)
+        c[:, :3] = xk + np.einsum("ja,jai->ji", p, dk) - xl
+        if self.l_rigid:
+            c[:, :3] -= np.einsum("ja,jai->ji", self.b, dl)
+        g[:, self._pr, self._pc] = np.repeat(p, 3, axis=1)  # ∂/∂d_α^k = p*_α I
+        g[:, :3, self.je] = np.einsum("ja,jai->ji", p1, dk)
         if self.rot:
-            a, b = self._ra, self._rb
-            jk = rs.T @ dk  # rows j_α^k
-            jkp = drs.T @ dk
-            jl = self.c.T @ dl
-            c[3:] = np.einsum("ri,ri->r", jk[a], jl[b]) - np.einsum("ri,ri->r", jk[b], jl[a])
-            gk = (np.einsum("br,ri->rbi", rs[:, a], jl[b])
-                  - np.einsum("br,ri->rbi", rs[:, b], jl[a]))
-            gl = (np.einsum("br,ri->rbi", self.c[:, b], jk[a])
-                  - np.einsum("br,ri->rbi", self.c[:, a], jk[b]))
-            g[3:, 3:12] = gk.reshape(len(a), 9)
-            g[3:, self.dl : self.dl + 9] = gl.reshape(len(a), 9)
-            g[3:, self.je] = (np.einsum("ri,ri->r", jkp[a], jl[b])
-                              - np.einsum("ri,ri->r", jkp[b], jl[a]))
+            w = self._w(r)
+            x = np.einsum("jbi,jgi->jbg", dk, dl)  # X_βγ = d_β^k·d_γ^ℓ
+            c[:, 3:] = np.einsum("jrbg,jbg->jr", w, x)
+            g[:, 3:, 3:12] = np.einsum("jrbg,jgi->jrbi", w, dl).reshape(nj, -1, 9)
+            g[:, 3:, self.dl : self.dl + 9] = np.einsum("jrbg,jbi->jrgi", w, dk).reshape(
+                nj, -1, 9)
+            g[:, 3:, self.je] = np.einsum("jrbg,jbg->jr", self._w(dr), x)
+        out = (c.ravel(), g.reshape(nj * mj, self.nc))
         if len(self._memo_eval) > 16:
             self._memo_eval.clear()
-        self._memo_eval[key] = (c, g)
-        return c, g
+        self._memo_eval[key] = out
+        return out
 
     def discrete_jacobian(self, qi: Array, qf: Array) -> Array:
         """Exact discrete derivative Ḡ with Ḡ·(q_f − q_i) = C(q_f) − C(q_i).
 
         Product rule with averages and the secant of the curve (design note): Δ(p_α d_α) =
         p̄_α Δd_α + d̄_α p̄'_α Δη with p̄' = (p(η_f) − p(η_i))/Δη; the rotation rows are
-        Σ W_βγ(η) d_β^k·d_γ^ℓ and use the secant of W = f(R*(η)) likewise. Only the end points
-        of the step are evaluated, each once per Newton iteration.
+        Σ W_βγ(η) d_β^k·d_γ^ℓ and use the secant of W likewise. Only the end points of the step
+        are evaluated, each once per Newton iteration.
         """
-        ei, pi, p1i, _, rsi, drsi, dki, dli = self._state(qi)
-        ef, pf, p1f, _, rsf, drsf, dkf, dlf = self._state(qf)
+        ei, pi, p1i, _, ri, dri, dki, dli = self._state(qi)
+        ef, pf, p1f, _, rf, drf, dkf, dlf = self._state(qf)
         de = ef - ei
-        small = abs(de) < 1e-9
+        small = np.abs(de) < 1e-9
+        safe = np.where(small, 1.0, de)
+        nj = self.nj
         g = self._g0.copy()
         pbar = 0.5 * (pi + pf)
-        sec = 0.5 * (p1i + p1f) if small else (pf - pi) / de
+        sec = np.where(small[:, None], 0.5 * (p1i + p1f), (pf - pi) / safe[:, None])
         dkbar = 0.5 * (dki + dkf)
-        g[self._pr, self._pc] = np.repeat(pbar, 3)
-        g[:3, self.je] = sec @ dkbar
+        g[:, self._pr, self._pc] = np.repeat(pbar, 3, axis=1)
+        g[:, :3, self.je] = np.einsum("ja,jai->ji", sec, dkbar)
         if self.rot:
-            a, b = self._ra, self._rb
             dlbar = 0.5 * (dli + dlf)
-            # W[r, β, γ] = R*_βa c_γb − R*_βb c_γa for each rotation row r
-            wi = (rsi[:, a].T[:, :, None] * self.c[:, b].T[:, None, :]
-                  - rsi[:, b].T[:, :, None] * self.c[:, a].T[:, None, :])
-            wf = (rsf[:, a].T[:, :, None] * self.c[:, b].T[:, None, :]
-                  - rsf[:, b].T[:, :, None] * self.c[:, a].T[:, None, :])
-            if small:
-                dr = 0.5 * (drsi + drsf)
-                dw = (dr[:, a].T[:, :, None] * self.c[:, b].T[:, None, :]
-                      - dr[:, b].T[:, :, None] * self.c[:, a].T[:, None, :])
-            else:
-                dw = (wf - wi) / de
+            wi, wf = self._w(ri), self._w(rf)
+            dw = np.where(small[:, None, None, None], 0.5 * (self._w(dri) + self._w(drf)),
+                          (wf - wi) / safe[:, None, None, None])
             wbar = 0.5 * (wi + wf)
-            xbar = 0.5 * (dki @ dli.T + dkf @ dlf.T)  # X_βγ = d_β^k·d_γ^ℓ averaged
-            g[3:, 3:12] = np.einsum("rbg,gi->rbi", wbar, dlbar).reshape(len(a), 9)
-            g[3:, self.dl : self.dl + 9] = np.einsum("rbg,bi->rgi", wbar, dkbar).reshape(
-                len(a), 9)
-            g[3:, self.je] = np.einsum("rbg,bg->r", dw, xbar)
-        return g
+            xbar = 0.5 * (np.einsum("jbi,jgi->jbg", dki, dli) + np.einsum("jbi,jgi->jbg",
+                                                                          dkf, dlf))
+            g[:, 3:, 3:12] = np.einsum("jrbg,jgi->jrbi", wbar, dlbar).reshape(nj, -1, 9)
+            g[:, 3:, self.dl : self.dl + 9] = np.einsum("jrbg,jbi->jrgi", wbar, dkbar).reshape(
+                nj, -1, 9)
+            g[:, 3:, self.je] = np.einsum("jrbg,jbg->jr", dw, xbar)
+        return g.reshape(nj * self.mj, self.nc)
 
     def hessian(self, q: Array, lam: Array) -> Array:
-        eta, p, p1, p2, rs, drs, dk, dl = self._state(q)
-        h = np.zeros((self.nc, self.nc))
-        je = self.je
-        for a in range(3):
-            h[je, 3 + 3 * a : 6 + 3 * a] += p1[a] * lam[:3]
-        h[je, je] += lam[:3] @ (p2 @ dk)
+        eta, p, p1, p2, r, dr, dk, dl = self._state(q)
+        nj, nc, je = self.nj, self.nc, self.je
+        lam = lam.reshape(nj, self.mj)
+        ld = lam[:, :3]
+        h = np.zeros((nj, nc, nc))
+        # displacement rows: ∂²/∂η∂d_α^k = p*'_α I, ∂²/∂η² = Σ p*''_α d_α^k
+        h[:, je, 3:12] = (p1[:, :, None] * ld[:, None, :]).reshape(nj, 9)
+        h[:, je, je] = np.einsum("ji,ja,jai->j", ld, p2, dk)
         if self.rot:
-            jk, jkp, jl = rs.T @ dk, drs.T @ dk, self.c.T @ dl
-            eye = np.eye(3)
-            for r, axis in enumerate(self.rot, start=3):
-                a, b = _PAIRS[axis]
-                lr = lam[r]
-                for beta in range(3):
-                    h[je, 3 + 3 * beta : 6 + 3 * beta] += lr * (
-                        drs[beta, a] * jl[b] - drs[beta, b] * jl[a])
-                    h[je, self.dl + 3 * beta : self.dl + 3 + 3 * beta] += lr * (
-                        self.c[beta, b] * jkp[a] - self.c[beta, a] * jkp[b])
-                    for gam in range(3):
-                        coef = lr * (rs[beta, a] * self.c[gam, b] - rs[beta, b] * self.c[gam, a])
-                        h[3 + 3 * beta : 6 + 3 * beta, self.dl + 3 * gam : self.dl + 3 + 3 * gam] \
-                            += coef * eye
-        # symmetrize the off-diagonal blocks filled on one side
-        h = h + h.T - np.diag(np.diag(h))
+            lr = lam[:, 3:]
+            w, dw = self._w(r), self._w(dr)
+            h[:, je, 3:12] += np.einsum("jr,jrbg,jgi->jbi", lr, dw, dl).reshape(nj, 9)
+            h[:, je, self.dl : self.dl + 9] += np.einsum("jr,jrbg,jbi->jgi", lr, dw,
+                                                         dk).reshape(nj, 9)
+            # ∂²/∂η²: d²R*/dη² by a central difference of the exact first derivative
+            eps = 1e-6
+            drp = self.Q @ self.curve.frame(np.clip(eta + eps, 0, 1))[1]
+            drm = self.Q @ self.curve.frame(np.clip(eta - eps, 0, 1))[1]
+            d2w = self._w((drp - drm) / (2 * eps))
+            x = np.einsum("jbi,jgi->jbg", dk, dl)
+            h[:, je, je] += np.einsum("jr,jrbg,jbg->j", lr, d2w, x)
+            coef = np.einsum("jr,jrbg->jbg", lr, w)  # ∂²/∂d_β^k ∂d_γ^ℓ = coef_βγ I
+            blk = np.einsum("jbg,ik->jbigk", coef, np.eye(3)).reshape(nj, 9, 9)
+            h[:, 3:12, self.dl : self.dl + 9] += blk
+        # the blocks above were filled on one side of the diagonal: symmetrize
+        diag = np.einsum("jii->ji", h).copy()
+        h = h + np.transpose(h, (0, 2, 1))
+        idx = np.arange(nc)
+        h[:, idx, idx] = diag
         return h.ravel()
 
-    def frenet(self, q: Array) -> Array:
-        """Frenet triad (columns t, n, b) at the contact point, global frame."""
-        eta = q[self.ie]
-        rs, _ = self.curve.frame(eta)
-        dk = q[self.ok + 3 : self.ok + 12].reshape(3, 3)
-        return dk.T @ rs
+
+def batch_curve_joints(items: list) -> list:
+    """Replace CurveSliding declarations by one :class:`CurveSlidingSet` per batch key."""
+    order, groups = [], {}
+    for it in items:
+        if isinstance(it, CurveSliding):
+            key = it.key()
+            if key not in groups:
+                groups[key] = []
+                order.append(key)
+            groups[key].append(it)
+        else:
+            order.append(it)
+    return [CurveSlidingSet(groups[k]) if isinstance(k, tuple) and k in groups else k
+            for k in order]
 
 
 class ArcLength(NonholonomicGroup):
@@ -340,6 +431,107 @@ class Rolling(NonholonomicGroup):
         row[1:10] = (k * _cross(ep, n)).ravel()
         row[10:19] = (-k * _cross(el, n)).ravel() + k * np.outer(self.axis, w).ravel()
         return row[None, :]
+
+
+class ArcLengthSet(NonholonomicGroup):
+    """All :class:`ArcLength` relations on one curve, vectorized."""
+
+    def __init__(self, arcs: list[ArcLength]) -> None:
+        self.arcs = arcs
+        self.name = ",".join(a.name for a in arcs)
+        self.row_names = [a.name for a in arcs]
+
+    def setup(self, sys) -> None:
+        for a in self.arcs:
+            a.setup(sys)
+        self.curve = self.arcs[0].joint.curve
+        self.i_e = np.array([a.i_e for a in self.arcs])
+        self.cols = np.array([[a.i_s, a.i_e] for a in self.arcs], dtype=np.int64)
+
+    def matrix(self, q: Array) -> Array:
+        sp_ = np.linalg.norm(self.curve.derivatives(q[self.i_e], 1)[1], axis=-1)
+        return np.stack([np.ones_like(sp_), -sp_], axis=1)
+
+    def derivative(self, q: Array, dq: Array) -> Array:
+        d = self.curve.derivatives(q[self.i_e], 2)
+        sp_ = np.linalg.norm(d[1], axis=-1)
+        out = np.zeros((len(self.arcs), 2))
+        out[:, 1] = -np.sum(d[1] * d[2], axis=-1) / sp_ * dq[self.i_e]
+        return out
+
+
+class RollingSet(NonholonomicGroup):
+    """All :class:`Rolling` relations of a model, vectorized."""
+
+    def __init__(self, rolls: list[Rolling]) -> None:
+        self.rolls = rolls
+        self.name = ",".join(r.name for r in rolls)
+        self.row_names = [r.name for r in rolls]
+
+    def setup(self, sys) -> None:
+        for r in self.rolls:
+            r.setup(sys)
+        self.cols = np.concatenate([r.cols for r in self.rolls])
+        self.ip = np.array([r.op for r in self.rolls])[:, None] + 3 + np.arange(9)
+        self.il = np.array([r.ol for r in self.rolls])[:, None] + 3 + np.arange(9)
+        self.k = np.array([0.5 * r.side * r.r for r in self.rolls])[:, None, None]
+        self.axis = np.array([r.axis for r in self.rolls])
+
+    def _get(self, q):
+        dp = q[self.ip].reshape(-1, 3, 3)
+        dl = q[self.il].reshape(-1, 3, 3)
+        n = np.einsum("jb,jbi->ji", self.axis, dl)[:, None, :]
+        return dp, dl, n
+
+    def matrix(self, q: Array) -> Array:
+        dp, dl, n = self._get(q)
+        nj = len(self.rolls)
+        out = np.empty((nj, 19))
+        out[:, 0] = 1.0
+        out[:, 1:10] = (self.k * _cross(n, dp)).reshape(nj, 9)
+        out[:, 10:19] = (-self.k * _cross(n, dl)).reshape(nj, 9)
+        return out
+
+    def derivative(self, q: Array, dq: Array) -> Array:
+        dp, dl, n = self._get(q)
+        ep = dq[self.ip].reshape(-1, 3, 3)
+        el = dq[self.il].reshape(-1, 3, 3)
+        nj = len(self.rolls)
+        w = (_cross(dp, ep) - _cross(dl, el)).sum(axis=1)  # ∂/∂n
+        out = np.zeros((nj, 19))
+        out[:, 1:10] = (self.k * _cross(ep, n)).reshape(nj, 9)
+        out[:, 10:19] = ((-self.k * _cross(el, n)).reshape(nj, 9)
+                         + (self.k[:, 0] * np.einsum("jb,ji->jbi", self.axis, w).reshape(nj, 9)))
+        return out
+
+
+def batch_nonholonomic(items: list) -> list:
+    """Replace ArcLength and Rolling declarations by vectorized sets."""
+    arcs: dict[int, list] = {}
+    rolls: list = []
+    out: list = []
+    for it in items:
+        if isinstance(it, ArcLength):
+            key = id(it.joint.curve)
+            if key not in arcs:
+                arcs[key] = []
+                out.append(("arc", key))
+            arcs[key].append(it)
+        elif isinstance(it, Rolling):
+            if not rolls:
+                out.append(("roll", 0))
+            rolls.append(it)
+        else:
+            out.append(it)
+    res = []
+    for it in out:
+        if isinstance(it, tuple) and it[0] == "arc":
+            res.append(ArcLengthSet(arcs[it[1]]))
+        elif isinstance(it, tuple) and it[0] == "roll":
+            res.append(RollingSet(rolls))
+        else:
+            res.append(it)
+    return res
 
 
 def _cross(a: Array, b: Array) -> Array:

@@ -99,15 +99,16 @@ class Integrator:
         raise NotImplementedError
 
     def _predict(self, default: Array) -> Array:
-        """Newton start for Δq: quadratic extrapolation of the last increments (error O(h³))."""
-        hist = getattr(self, "_dq_hist", ())
+        """Newton start for x = (Δq, μ, ν): linear extrapolation of the last two solutions
+        (for Δq that is a quadratic extrapolation of q, error O(h³))."""
+        hist = getattr(self, "_x_hist", ())
         if len(hist) == 2:
             return 2.0 * hist[1] - hist[0]
         return default
 
-    def _history(self, dq: Array) -> None:
-        hist = getattr(self, "_dq_hist", ())
-        self._dq_hist = (*hist[-1:], dq.copy())
+    def _history(self, x: Array) -> None:
+        hist = getattr(self, "_x_hist", ())
+        self._x_hist = (*hist[-1:], x.copy())
 
     def violation(self) -> float:
         """max |C(q, t)| over the holonomic rows."""
@@ -159,7 +160,7 @@ class Midpoint(Integrator):
             a31 = am + 0.5 * s.nonholonomic_derivative(qm, dq) if s.mn else am
             return s.kkt(1.0, k, d, 0.5 * hq, 0.5 * hg, gbar, gf, am, a31)
 
-        x0 = np.concatenate([self._predict(h * vi), c * self.lam, c * self.nu])
+        x0 = self._predict(np.concatenate([h * vi, c * self.lam, c * self.nu]))
         res = newton(residual, jacobian, x0, self._converged, self.lin, self.reuse)
         if not res.converged:
             return StepInfo(False, res.iterations, res.factorizations, res.message)
@@ -170,7 +171,7 @@ class Midpoint(Integrator):
         # work of drivers (constraint forces of prescribed motions) and of applied loads
         self.work += -float(lam @ s.gmul(gbar, dq)) + float(s.applied(qm, dq / h, tm) @ dq)
         self.q, self.v, self.t, self.lam, self.nu = qf, vf, tf, lam, nuv
-        self._history(dq)
+        self._history(res.x)
         return StepInfo(True, res.iterations, res.factorizations)
 
 
@@ -240,8 +241,8 @@ class GeneralizedAlpha(Integrator):
             a31 = a_ + (b * h / g) * s.nonholonomic_derivative(qf, vf) if s.mn else a_
             return s.kkt(1.0, k, d, hq, hg, gf, gf, a_, a31)
 
-        x0 = np.concatenate([self._predict(h * vi + 0.5 * h * h * ai), sc * self.lam,
-                             sc * self.nu])
+        x0 = self._predict(np.concatenate([h * vi + 0.5 * h * h * ai, sc * self.lam,
+                                           sc * self.nu]))
         res = newton(residual, jacobian, x0, self._converged, self.lin, self.reuse)
         if not res.converged:
             return StepInfo(False, res.iterations, res.factorizations, res.message)
@@ -254,7 +255,7 @@ class GeneralizedAlpha(Integrator):
         self.work += -float(lam @ s.gmul(gm, dq)) + float(s.applied(qm, vm, ti + 0.5 * h) @ dq)
         self.q, self.v, self.t, self.lam, self.nu = qf, vf, tf, lam, nuv
         self.acc, self.qdd = anew, qdd
-        self._history(dq)
+        self._history(res.x)
         return StepInfo(True, res.iterations, res.factorizations)
 
 

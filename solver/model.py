@@ -31,6 +31,7 @@ class Model:
     def add(self, *items):
         """Add bodies, joints, force elements, scalars or constraint groups; returns the last."""
         from solver.constraints import HolonomicGroup, NonholonomicGroup
+        from solver.curve_joints import CurveSliding
 
         for it in items:
             if isinstance(it, Joint):
@@ -41,7 +42,7 @@ class Model:
                 self.scalars.append(it)
             elif isinstance(it, (list, tuple)):
                 self.add(*it)
-            elif isinstance(it, HolonomicGroup):
+            elif isinstance(it, (HolonomicGroup, CurveSliding)):
                 self.constraints.append(it)
                 self.scalars.extend(s for s in it.scalars() if s not in self.scalars)
             elif isinstance(it, NonholonomicGroup):

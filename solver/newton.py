@@ -18,7 +18,8 @@ import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
 
 NEWTON_MAXITER = 30  # Maximum number of Newton iterations per step.
-SLOW_RATE = 0.25  # Contraction rate above which stale LU factors are refreshed.
+SLOW_RATE = 0.25  # Contraction rate above which the LU factors are refreshed.
+STALE_RATE = 0.02  # Rate above which factors from an earlier step are not worth keeping.
 
 
 @dataclass
@@ -79,7 +80,7 @@ def newton(residual: Callable[[NDArray], NDArray], jacobian: Callable[[NDArray],
         # converged, or stagnating at the roundoff floor (tiny updates that no longer shrink)
         if converged(x, dx) or (rate > 0.5 and converged(x, dx * 1e-3)):
             return NewtonResult(x, True, it, nfact)
-        if rate > SLOW_RATE or (not fresh and it >= 4):
+        if rate > SLOW_RATE or (not fresh and (it >= 4 or rate > STALE_RATE)):
             if fresh and rate >= 1.0 and it > 3:
                 return NewtonResult(x, False, it, nfact,
                                     f"Newton diverged (contraction rate {rate:.2f} ≥ 1)")

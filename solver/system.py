@@ -77,7 +77,9 @@ class System:
         self.quad = qb.build()
         self.mq = self.quad.m
 
-        self.groups = list(model.constraints)
+        from solver.curve_joints import batch_curve_joints
+
+        self.groups = batch_curve_joints(list(model.constraints))
         self.group_rows = []
         m = self.mq
         for g in self.groups:
@@ -85,7 +87,9 @@ class System:
             self.group_rows.append(np.arange(m, m + g.m))
             m += g.m
         self.mh = m
-        self.nh_groups = list(model.nonholonomic)
+        from solver.curve_joints import batch_nonholonomic
+
+        self.nh_groups = batch_nonholonomic(list(model.nonholonomic))
         self.nh_rows = []
         for g in self.nh_groups:
             g.setup(self)

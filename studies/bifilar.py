@@ -34,7 +34,6 @@ import xarray as xr
 
 from solver.bodies import RigidBody, spinning
 from solver.curve_joints import ArcLength, CurveSliding, Rolling
-from solver.curves import NurbsCurve
 from solver.forces import RelativeRotation
 from solver.joints import Orientation, Revolute, Rigid
 from solver.model import Model
@@ -93,12 +92,6 @@ def check(p: dict[str, Any]) -> None:
     holes_for(p)
 
 
-def _rotated(curve: NurbsCurve, q: np.ndarray) -> NurbsCurve:
-    """The same NURBS with its control points rotated by q (exact for rational curves)."""
-    return NurbsCurve(curve.degree, curve.knots, curve.control_points @ q.T, curve.weights,
-                      plane_normal=None if curve.plane_normal is None else q @ curve.plane_normal)
-
-
 @dataclass
 class BifilarParts:
     """Handles to one bifilar's bodies and joints, for outputs."""
@@ -144,11 +137,9 @@ def add_bifilar(model: Model, hub, holes: Holes, amplitude: float, angle: float 
         model.add(mass, pin, Rigid(f"{prefix}lock", hub, mass, point=cm),
                   Rigid(f"{prefix}pinlock", hub, pin, point=pin_c))
         return BifilarParts(angle, holes, mass, pin, None, None, True)
-    c1 = _rotated(holes.c1, q)
-    a1_loc = q @ np.array([*holes.hole_point(sig)[0], 0.0])
-    eta1 = c1.closest_eta(a1_loc)
-    a1 = c0 + c1.point(eta1)
-    r1 = c1.frame(eta1)[0]
+    eta1 = holes.c1.closest_eta(np.array([*holes.hole_point(sig)[0], 0.0]))
+    a1 = c0 + q @ holes.c1.point(eta1)
+    r1 = q @ holes.c1.frame(eta1)[0]
     # contact on the tuning mass's hole, in its frame (= the bifilar frame at t = 0)
     b_loc = q.T @ (pin_c - cm) - 0.5 * g.pin_diameter * (q.T @ (pin_c - a1)) / (
         0.5 * g.pin_diameter)
@@ -159,7 +150,9 @@ def add_bifilar(model: Model, hub, holes: Holes, amplitude: float, angle: float 
                       angular_velocity=w)
     link2 = RigidBody(f"{prefix}link2", 0.0, position=a2, orientation=r2, velocity=vel(a2),
                       angular_velocity=w)
-    j1 = CurveSliding(f"{prefix}slide1", hub, c1, link1, point=a1, eta0=eta1, rotation=True)
+    # the arm's hole, placed on the hub by the bifilar's rotation (one curve for all bifilars)
+    j1 = CurveSliding(f"{prefix}slide1", hub, holes.c1, link1, point=a1, eta0=eta1,
+                      rotation=True, placement=(q, c0 * 0.0))
     j2 = CurveSliding(f"{prefix}slide2", mass, holes.c2, link2, point=a2, eta0=eta2,
                       rotation=True)
     arc1, arc2 = ArcLength(j1), ArcLength(j2)
@@ -250,7 +243,8 @@ def run(params: dict[str, Any]) -> xr.Dataset:
     out["jacobi"] = ("time", jac, {"units": "J", "long_name": "Jacobi integral T + V − Ω L_z "
                                    "(energy in the rotating frame; Ω̃ = 2tan(Ωh/2)/h for ep)"})
     roll = np.array(rec["roll"])
-    out = out.assign_coords(relation=[g.name for g in sysm.nh_groups])
+    out = out.assign_coords(relation=[n for g in sysm.nh_groups
+                                      for n in getattr(g, "row_names", [g.name])])
     out["rolling_residual"] = (("time", "relation"), roll, {
         "units": "m s-1", "long_name": "discrete residual A(q_m)(q_f − q_i)/h of the rolling "
         "and arc-length relations"})
