@@ -41,6 +41,8 @@ class ForceElement:
     jac_cols = EMPTY_I
 
     def setup(self, system) -> None: ...
+    def accept(self, q: Array) -> None:
+        """Called after every converged step (e.g. to unwrap angles)."""
     def potential(self, q: Array) -> float:
         return 0.0
     def gradient(self, q: Array) -> tuple[NDArray[np.int64], Array]:
@@ -216,12 +218,18 @@ class RelativeRotation(ForceElement):
         self.hess_rows = np.repeat(i, len(i))
         self.hess_cols = np.tile(i, len(i))
         self.jac_rows, self.jac_cols = self.hess_rows, self.hess_cols
-        self._turns = 0.0
+        self._ref = 0.0  # unwrapped angle at the last converged step
+
+    def accept(self, q):
+        self._ref = self._phi_grad(q)[0]
 
     def _phi_grad(self, q):
+        """φ (rad, unwrapped against the last converged step) and its gradient."""
         c, s, gc, gs = self.cs(q)
         r2 = c * c + s * s
-        return np.arctan2(s, c), (c * gs - s * gc) / r2
+        phi = np.arctan2(s, c)
+        phi = self._ref + np.angle(np.exp(1j * (phi - self._ref)))
+        return phi, (c * gs - s * gc) / r2
 
     def potential(self, q):
         phi, _ = self._phi_grad(q)

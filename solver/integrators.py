@@ -69,6 +69,11 @@ class Integrator:
         self.v = project_velocities(system, self.q, v, self.t)
         self.lam = np.zeros(system.mh)
         self.nu = np.zeros(system.mn)
+        try:  # multipliers of the consistent initial accelerations (reactions at t = 0)
+            _, self.lam, self.nu = initial_accelerations(system, self.q, self.v, self.t,
+                                                         multipliers=True)
+        except ValueError:
+            pass
         self.work = 0.0
         self.energy0 = self.energy()
         self.n_steps = 0
@@ -86,13 +91,33 @@ class Integrator:
         n = self.sys.n
         return float(np.abs(dx[:n]).max()) <= CONSTRAINT_TOL * self.scale
 
+    _full = False
+
     def step(self) -> StepInfo:
-        """Advance one step of size h; on failure the state is left unchanged."""
+        """Advance one step of size h; on failure the state is left unchanged.
+
+        A step whose fast (modified) Newton iteration fails is retried once with full Newton
+        from the plain predictor, refactoring at every iteration.
+        """
         info = self._solve()
+        if not info.converged:
+            hist, self._x_hist = getattr(self, "_x_hist", ()), ()
+            self._full = True
+            try:
+                retry = self._solve()
+            finally:
+                self._full = False
+            info = StepInfo(retry.converged, info.iterations + retry.iterations,
+                            info.factorizations + retry.factorizations,
+                            retry.message if not retry.converged else "")
+            if not info.converged:
+                self._x_hist = hist
         self.n_iterations += info.iterations
         self.n_factorizations += info.factorizations
         if info.converged:
             self.n_steps += 1
+            for f in self.sys.forces:
+                f.accept(self.q)
         return info
 
     def _solve(self) -> StepInfo:
@@ -161,7 +186,8 @@ class Midpoint(Integrator):
             return s.kkt(1.0, k, d, 0.5 * hq, 0.5 * hg, gbar, gf, am, a31)
 
         x0 = self._predict(np.concatenate([h * vi, c * self.lam, c * self.nu]))
-        res = newton(residual, jacobian, x0, self._converged, self.lin, self.reuse)
+        res = newton(residual, jacobian, x0, self._converged, self.lin,
+                     self.reuse and not self._full, full=self._full)
         if not res.converged:
             return StepInfo(False, res.iterations, res.factorizations, res.message)
         dq, qf, qm, mu, nu = unpack(res.x)
@@ -243,7 +269,8 @@ class GeneralizedAlpha(Integrator):
 
         x0 = self._predict(np.concatenate([h * vi + 0.5 * h * h * ai, sc * self.lam,
                                            sc * self.nu]))
-        res = newton(residual, jacobian, x0, self._converged, self.lin, self.reuse)
+        res = newton(residual, jacobian, x0, self._converged, self.lin,
+                     self.reuse and not self._full, full=self._full)
         if not res.converged:
             return StepInfo(False, res.iterations, res.factorizations, res.message)
         dq, qf, vf, anew, mu, nu = unpack(res.x)
@@ -252,7 +279,8 @@ class GeneralizedAlpha(Integrator):
         qm, vm = qi + 0.5 * dq, 0.5 * (vi + vf)
         gm = s.jacobian_values(qm, ti + 0.5 * h)
         # work booked with midpoint values (the scheme has no exact discrete energy balance)
-        self.work += -float(lam @ s.gmul(gm, dq)) + float(s.applied(qm, vm, ti + 0.5 * h) @ dq)
+        lam_m = 0.5 * (self.lam + lam)
+        self.work += -float(lam_m @ s.gmul(gm, dq)) + float(s.applied(qm, vm, ti + 0.5 * h) @ dq)
         self.q, self.v, self.t, self.lam, self.nu = qf, vf, tf, lam, nuv
         self.acc, self.qdd = anew, qdd
         self._history(res.x)
@@ -385,7 +413,7 @@ def project_velocities(s: System, q: Array, v: Array, t: float) -> Array:
     return sol[: s.n]
 
 
-def initial_accelerations(s: System, q: Array, v: Array, t: float) -> Array:
+def initial_accelerations(s: System, q: Array, v: Array, t: float, multipliers: bool = False):
     """q̈ from [[M, Gᵀ, Aᵀ], [G, 0, 0], [A, 0, 0]] [q̈; λ; ν] = [f − ∇V; −γ; −γ_A]."""
     g = s.jacobian_values(q, t)
     a = s.nonholonomic_values(q) if s.mn else np.zeros(0)
@@ -401,4 +429,7 @@ def initial_accelerations(s: System, q: Array, v: Array, t: float) -> Array:
     msg = lin.factor(mat)
     if msg:
         raise ValueError(f"cannot compute consistent initial accelerations: {msg}")
-    return lin.lu.solve(rhs)[: s.n]
+    sol = lin.lu.solve(rhs)
+    if multipliers:
+        return sol[: s.n], sol[s.n : s.n + s.mh], sol[s.n + s.mh :]
+    return sol[: s.n]

@@ -20,6 +20,9 @@ from numpy.typing import NDArray
 NEWTON_MAXITER = 30  # Maximum number of Newton iterations per step.
 SLOW_RATE = 0.25  # Contraction rate above which the LU factors are refreshed.
 STALE_RATE = 0.02  # Rate above which factors from an earlier step are not worth keeping.
+# Updates that stop shrinking while within 1/ROUNDOFF_FLOOR of the tolerance are roundoff noise
+# (the KKT matrix's condition number times machine precision), not divergence.
+ROUNDOFF_FLOOR = 1e-5
 
 
 @dataclass
@@ -51,11 +54,12 @@ class LinearSolver:
 
 def newton(residual: Callable[[NDArray], NDArray], jacobian: Callable[[NDArray], object],
            x0: NDArray, converged: Callable[[NDArray, NDArray], bool], solver: LinearSolver,
-           reuse: bool = True) -> NewtonResult:
+           reuse: bool = True, full: bool = False) -> NewtonResult:
     """Solve residual(x) = 0 from x0.
 
     ``converged(x, dx)`` decides convergence after each update; ``solver`` keeps LU factors
-    that are reused across calls when ``reuse`` is true.
+    that are reused across calls when ``reuse`` is true. ``full`` refactors at every iteration
+    and only gives up on non-finite values or the iteration limit (the robust retry).
     """
     x = x0.copy()
     nfact = 0
@@ -77,18 +81,29 @@ def newton(residual: Callable[[NDArray], NDArray], jacobian: Callable[[NDArray],
         x += dx
         size = float(np.abs(dx).max())
         rate = size / prev if np.isfinite(prev) and prev > 0 else 0.0
+        if full:
+            if converged(x, dx) or (rate > 0.5 and converged(x, dx * ROUNDOFF_FLOOR)):
+                return NewtonResult(x, True, it, nfact)
+            msg = solver.factor(jacobian(x))
+            nfact += 1
+            if msg:
+                return NewtonResult(x, False, it, nfact, msg)
+            prev = size
+            continue
         # converged, or stagnating at the roundoff floor (tiny updates that no longer shrink)
-        if converged(x, dx) or (rate > 0.5 and converged(x, dx * 1e-3)):
+        if converged(x, dx) or (rate > 0.5 and converged(x, dx * ROUNDOFF_FLOOR)):
             return NewtonResult(x, True, it, nfact)
         if rate > SLOW_RATE or (not fresh and (it >= 4 or rate > STALE_RATE)):
             if fresh and rate >= 1.0 and it > 3:
                 return NewtonResult(x, False, it, nfact,
                                     f"Newton diverged (contraction rate {rate:.2f} ≥ 1)")
+            fresh = True
             msg = solver.factor(jacobian(x))
             nfact += 1
-            fresh = True
             if msg:
                 return NewtonResult(x, False, it, nfact, msg)
+            prev = np.inf  # rates are only compared within one factorization
+            continue
         prev = size
     return NewtonResult(x, False, NEWTON_MAXITER, nfact,
                         f"Newton did not converge in {NEWTON_MAXITER} iterations")

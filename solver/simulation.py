@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import xarray as xr
 
-from solver.bodies import PointMass
+from solver.bodies import PointMass, PrescribedBody
 from solver.integrators import Integrator, make_integrator
 from solver.joints import Revolute
 from solver.rotations import wiener_milenkovic_from_matrix
@@ -56,6 +56,8 @@ def simulate(model, t_end: float, h: float, scheme: str = "ep", rho_inf: float |
     """
     if not (np.isfinite(t_end) and t_end > 0):
         raise ValueError(f"t_end = {t_end!r} s must be > 0")
+    if not t_end >= h:
+        raise ValueError(f"t_end = {t_end!r} s must be at least one time step h = {h!r} s")
     if record_every < 1:
         raise ValueError(f"record_every = {record_every!r} must be ≥ 1")
     s = system if system is not None else System(model)
@@ -102,8 +104,6 @@ def simulate(model, t_end: float, h: float, scheme: str = "ep", rho_inf: float |
 
 class _Recorder:
     def __init__(self, s: System, reactions: bool) -> None:
-        from solver.bodies import PrescribedBody
-
         self.s = s
         self.bodies = [b for b in s.bodies if not (isinstance(b, PrescribedBody)
                                                    and b.name == "ground")]
@@ -120,6 +120,12 @@ class _Recorder:
         for b in self.bodies:
             o = s.offset[b]
             xs.append(q[o : o + 3])
+            if isinstance(b, PrescribedBody):  # report the driver's exact velocities
+                _, _, vel, w, *_ = b.motion(integ.t)
+                vs.append(np.asarray(vel, dtype=float))
+                rs.append(s.directors(q, b))
+                ws.append(np.asarray(w, dtype=float))
+                continue
             vs.append(v[o : o + 3])
             if isinstance(b, PointMass):
                 rs.append(np.eye(3))

@@ -44,8 +44,9 @@ N_BIFILARS = 4
 
 # UH-60-class values (public: 4 blades of 116.5 kg, R = 8.18 m, Ω = 27 rad/s). The hub mass,
 # shaft-head mass and fuselage restraint are assumptions: the fuselage in-plane mode at the hub
-# is placed at 1.2 × 4P with 2% damping, so halving its stiffness moves it below 4P (the
-# sensitivity the paper's case 3 shows).
+# is placed at 0.9 × 4P with 2% damping (below the 4P excitation, so the hub response is
+# mass-controlled and halving the stiffness changes it by tens of percent, the sensitivity the
+# paper's case 3 shows), and away from the bifilars' coupled modes.
 PARAMETERS: dict[str, Param] = {
     "bifilar": Param("free", "1", "bifilar tuning masses free or locked to the hub",
                      choices=("free", "locked")),
@@ -55,7 +56,7 @@ PARAMETERS: dict[str, Param] = {
     "hub_speed": Param(27.0, "rad s-1", "rotor speed Ω", minimum=1.0, maximum=200.0),
     "fuselage_stiffness_scale": Param(1.0, "1", "scale on the nominal fuselage stiffness",
                                       minimum=0.0, exclusive_minimum=True, maximum=100.0),
-    "fuselage_stiffness": Param(1.69e7, "N m-1", "nominal in-plane fuselage stiffness at the "
+    "fuselage_stiffness": Param(1.015e7, "N m-1", "nominal in-plane fuselage stiffness at the "
                                 "hub", minimum=0.0, exclusive_minimum=True),
     "fuselage_damping_ratio": Param(0.02, "1", "damping ratio of the nominal fuselage mode",
                                     minimum=0.0, maximum=1.0),
@@ -63,8 +64,6 @@ PARAMETERS: dict[str, Param] = {
                         minimum=0.0, exclusive_minimum=True),
     "rotor_mass": Param(716.0, "kg", "rotor mass (hub and 4 blades)", minimum=0.0,
                         exclusive_minimum=True),
-    "rotor_inertia": Param(1.04e4, "kg m2", "rotor polar moment of inertia", minimum=0.0,
-                           exclusive_minimum=True),
     "excitation_3p": Param(1500.0, "N", "amplitude of the 3P rotating-frame hub shear",
                            minimum=0.0),
     "excitation_5p": Param(1000.0, "N", "amplitude of the 5P rotating-frame hub shear",
@@ -77,9 +76,9 @@ PARAMETERS: dict[str, Param] = {
     "pin_mass": Param(0.5, "kg", "mass of one pin", minimum=0.0),
     "pin_diameter": Param(0.030, "m", "pin diameter", minimum=0.0, exclusive_minimum=True),
     "pin_inertia": Param(5.6e-5, "kg m2", "polar inertia of one pin", minimum=0.0),
-    "pin_damping_ratio": Param(0.03, "1", "pendulum damping ratio from rolling resistance",
+    "pin_damping_ratio": Param(0.01, "1", "pendulum damping ratio from rolling resistance",
                                minimum=0.0, maximum=0.5),
-    "steps_per_rev": Param(240, "1", "time steps per revolution", minimum=64, maximum=20000),
+    "steps_per_rev": Param(160, "1", "time steps per revolution", minimum=64, maximum=20000),
     "revolutions": Param(2, "1", "whole revolutions recorded once periodic", minimum=1,
                          maximum=50),
     "max_revolutions": Param(80, "1", "revolutions allowed to reach a periodic response",
@@ -120,9 +119,11 @@ def build(p: dict[str, Any]):
     m_bif = p["tuning_mass"] + 2 * p["pin_mass"]
     g0 = ground()
     shaft = RigidBody("shaft", p["shaft_mass"], inertia=(1.0, 1.0, 1.0))
-    hub = RigidBody("hub", p["rotor_mass"], inertia=(0.5 * p["rotor_inertia"],
-                                                     0.5 * p["rotor_inertia"],
-                                                     p["rotor_inertia"]),
+    # The rotor's speed is prescribed, so its polar inertia only sets the driving torque, not
+    # the motion; it is left out (a unit inertia keeps the hub's rotation well posed). With the
+    # real 1e4 kg·m² the midpoint rule's two-step velocity mode of the driven rotation, of
+    # relative size (Ωh)², would show up as a large alternating driving torque and slow Newton.
+    hub = RigidBody("hub", p["rotor_mass"], inertia=(1.0, 1.0, 1.0),
                     angular_velocity=omega * Z)
     k = p["fuselage_stiffness"] * p["fuselage_stiffness_scale"]
     m_tot = p["shaft_mass"] + p["rotor_mass"] + N_BIFILARS * m_bif
