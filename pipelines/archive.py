@@ -1,0 +1,436 @@
+"""netCDF archive of a study: one file per case, written atomically, consolidated at the end.
+
+netCDF-C/HDF5 is not thread safe and a sweep may be killed at any time, so every worker writes
+its own case file (``cases/<case_id>.nc``) through a temporary file in the same directory and an
+``os.replace``: a case file either exists complete or not at all. The sweep process alone then
+reads them all and writes the consolidated archive, following the CF-1.11 conventions.
+
+Case file (one case)
+    The case summary made by :func:`case_summary`: harmonics from
+    :func:`pipelines.harmonics.case_harmonics` (the ``bifilar`` dimension renamed
+    ``bifilar_index`` so that it can never clash with a model parameter called ``bifilar``), the
+    last recorded revolution of the time histories (dimension ``time_in_rev``, coordinate ``psi``
+    in degrees) and a few ``run_*`` scalars; global attributes ``case_id``, ``model``,
+    ``parameters`` (JSON), ``status``, ``message``, ``wall_time`` and, for a failure,
+    ``traceback``. A failed case holds the attributes only.
+
+Consolidated archive
+    The same variables with the case dimensions in front: one dimension per swept parameter
+    (a Cartesian sweep) or one ``case`` dimension (an explicit case list); ``status`` (int8 flags
+    ok/failed/not_run), ``message`` and ``case_id`` per case; parameters that vary are coordinates
+    on the case dimensions and those common to all cases are scalar variables, all with the
+    ``units`` and ``long_name`` of their :class:`~studies.parameters.Param`. Data of cases that did
+    not finish are NaN (floats) or the ``_FillValue`` -1 (integers).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import importlib.metadata
+import os
+import tempfile
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any
+
+import dask.config
+import numpy as np
+import xarray as xr
+
+from pipelines.harmonics import N_MAX, case_harmonics, recording_layout
+
+CONVENTIONS = "CF-1.11"
+REFERENCES = (
+    "O. A. Bauchau, J. Rodriguez, S.-Y. Chen, Modeling the Bifilar Pendulum Using Nonlinear, "
+    "Flexible Multibody Dynamics, Journal of the American Helicopter Society, 2003"
+)
+
+# Case status flags (CF flag_values / flag_meanings).
+STATUS_OK = 0
+STATUS_FAILED = 1
+STATUS_NOT_RUN = 2
+FLAG_VALUES = np.array([STATUS_OK, STATUS_FAILED, STATUS_NOT_RUN], dtype=np.int8)
+FLAG_MEANINGS = "ok failed not_run"
+
+# netCDF compression of float variables: level 4 is most of zlib's gain at a fraction of level 9's
+# time.
+COMPRESSION = {"zlib": True, "complevel": 4}
+# Missing value of integer variables (a failed case has no revolution count).
+INT_FILL = -1
+
+# Time histories kept per case (last recorded revolution) for the plots: name -> default units,
+# long_name (used if the model did not give them).
+HISTORY_VARIABLES: dict[str, tuple[str, str]] = {
+    "pin_angle": ("degree", "bifilar pin angle"),
+    "hub_x_fixed": ("m", "hub x displacement, fixed frame"),
+    "hub_y_fixed": ("m", "hub y displacement, fixed frame"),
+    "bifilar_cm_x_fixed": ("m", "x displacement of the bifilar tuning masses' centre of mass, "
+                                "fixed frame"),
+    "bifilar_cm_y_fixed": ("m", "y displacement of the bifilar tuning masses' centre of mass, "
+                                "fixed frame"),
+    "hub_force_x_fixed": ("N", "in-plane hub force on the fuselage, x, fixed frame"),
+    "hub_force_y_fixed": ("N", "in-plane hub force on the fuselage, y, fixed frame"),
+}
+
+# Names the archive itself uses: a model parameter with one of these names cannot be archived.
+RESERVED_NAMES = frozenset(
+    {"case", "case_name", "case_id", "status", "message", "harmonic", "direction",
+     "bifilar_index", "time_in_rev", "psi", "run_hub_speed", "run_revolutions",
+     "run_transient_revolutions", "run_samples_per_rev", "run_wall_time"}
+    | set(HISTORY_VARIABLES)
+)
+
+
+class ArchiveError(ValueError):
+    """A case file or archive cannot be read or has an unexpected layout."""
+
+
+def code_version() -> str:
+    """The installed version of the ``bifilar`` distribution, or ``"unknown"``."""
+    try:
+        return importlib.metadata.version("bifilar")
+    except importlib.metadata.PackageNotFoundError:
+        return "unknown"
+
+
+def global_attrs(*, title: str, model: str, study_text: str, command: str) -> dict[str, str]:
+    """CF-1.11 global attributes of an archive.
+
+    Parameters
+    ----------
+    title
+        Short description of the study.
+    model
+        Name of the model that produced the cases.
+    study_text
+        Full text of the study file, kept so the archive alone can reproduce the study.
+    command
+        Command line that produced the archive (goes into ``history``).
+    """
+    now = datetime.now(UTC).isoformat(timespec="seconds")
+    return {
+        "Conventions": CONVENTIONS,
+        "title": title,
+        "source": f"bifilar {code_version()} (model {model!r})",
+        "history": f"{now}: {command}",
+        "references": REFERENCES,
+        "comment": "Per-rev harmonics are x = c0 + sum_k (c_k cos k psi + s_k sin k psi), "
+                   "psi = hub_speed * time; amplitude = hypot(c_k, s_k).",
+        "model": model,
+        "study": study_text,
+    }
+
+
+def _one_revolution(values: np.ndarray, samples_per_rev: int, psi_start: float) -> np.ndarray:
+    """Last revolution of ``values`` (time last) re-sampled to start at azimuth 0.
+
+    A whole-sample offset is a plain rotation; a fractional one is a Fourier shift, exact for the
+    band-limited periodic signal.
+    """
+    last = values[..., -samples_per_rev:]
+    phase = psi_start % (2 * np.pi)  # reduced first: m·psi_start loses digits after many revs
+    offset = phase / (2 * np.pi) * samples_per_rev
+    whole = round(offset)
+    if abs(offset - whole) < 1e-9:
+        # roll(a, s)[j] = a[j - s]: the sample at azimuth j·Δψ
+        return np.roll(last, whole % samples_per_rev, axis=-1)
+    m = np.arange(samples_per_rev // 2 + 1)
+    shifted = np.fft.rfft(last, axis=-1) * np.exp(-1j * m * phase)
+    return np.fft.irfft(shifted, n=samples_per_rev, axis=-1)
+
+
+def _psi_coord(samples_per_rev: int) -> xr.Variable:
+    return xr.Variable(
+        "time_in_rev",
+        360.0 * np.arange(samples_per_rev) / samples_per_rev,
+        {"units": "degree",
+         "long_name": "rotor azimuth psi = hub_speed * time, over the last recorded revolution"},
+    )
+
+
+def case_summary(ds: xr.Dataset, n_max: int = N_MAX) -> xr.Dataset:
+    """What the archive keeps of one model result: harmonics and one revolution of histories.
+
+    Parameters
+    ----------
+    ds
+        Model result in the hub layout (see :func:`pipelines.harmonics.case_harmonics`).
+    n_max
+        Highest harmonic kept.
+
+    Returns
+    -------
+    xarray.Dataset
+        Harmonic variables (dims ``direction``, ``harmonic`` or ``bifilar_index``, ``harmonic``);
+        the time histories of :data:`HISTORY_VARIABLES` over the last recorded revolution (dim
+        ``time_in_rev``, coordinate ``psi`` in degree, starting at psi = 0); ``run_hub_speed``
+        (rad s-1), ``run_revolutions``, ``run_transient_revolutions``, ``run_samples_per_rev``.
+    """
+    omega, n, revs, psi0 = recording_layout(ds)
+    out = case_harmonics(ds, n_max)
+    if "bifilar" in out.dims:
+        out = out.rename({"bifilar": "bifilar_index"})
+    psi_last = psi0 + 2 * np.pi * (revs - 1)
+    for name, (units, long_name) in HISTORY_VARIABLES.items():
+        if name not in ds:
+            continue
+        var = ds[name]
+        if name == "pin_angle":
+            var = var.transpose("bifilar", "time")
+            dims: tuple[str, ...] = ("bifilar_index", "time_in_rev")
+        else:
+            dims = ("time_in_rev",)
+        attrs = {"units": var.attrs.get("units", units),
+                 "long_name": var.attrs.get("long_name", long_name),
+                 "comment": "last recorded revolution, from azimuth psi = 0"}
+        out[name] = (dims, _one_revolution(var.values.astype(float), n, psi_last), attrs)
+    out = out.assign_coords(psi=_psi_coord(n))
+    out["run_hub_speed"] = ((), omega, {"units": "rad s-1", "long_name": "rotor speed"})
+    out["run_revolutions"] = ((), np.int32(revs),
+                              {"units": "1", "long_name": "revolutions recorded"})
+    out["run_samples_per_rev"] = ((), np.int32(n),
+                                  {"units": "1", "long_name": "samples per revolution"})
+    if "transient_revolutions" in ds.attrs:
+        out["run_transient_revolutions"] = (
+            (), np.int32(ds.attrs["transient_revolutions"]),
+            {"units": "1", "long_name": "revolutions simulated before recording"},
+        )
+    return out
+
+
+def _float_encoding(ds: xr.Dataset) -> dict[str, dict[str, Any]]:
+    return {
+        name: dict(COMPRESSION)
+        for name, var in ds.variables.items()
+        if np.issubdtype(var.dtype, np.floating)
+    }
+
+
+def _write_atomic(ds: xr.Dataset, path: Path, encoding: Mapping[str, Any]) -> Path:
+    """Write ``ds`` to ``path`` so that ``path`` is never seen half written."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    # Same directory as the target, so that os.replace is an atomic rename on one filesystem.
+    # The name does not end in .nc: a leftover from a killed writer is never taken for a case.
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=".tmp")
+    os.close(fd)
+    try:
+        # The data are in memory. Without this, xarray inside a dask worker would open a client
+        # to the scheduler and take a cluster-wide lock for every write.
+        with dask.config.set(scheduler="synchronous"):
+            ds.to_netcdf(tmp, engine="netcdf4", format="NETCDF4", encoding=dict(encoding))
+        # Data on disk before the rename, so a power cut cannot leave an empty "finished" case.
+        with open(tmp, "rb") as fh:
+            os.fsync(fh.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(tmp)
+        raise
+    return path
+
+
+def write_case(ds: xr.Dataset, path: str | os.PathLike[str]) -> Path:
+    """Write one case file atomically (temporary file in the same directory, then rename).
+
+    Parameters
+    ----------
+    ds
+        Case summary (see :func:`case_summary`) with the case's global attributes; float
+        variables are zlib-compressed.
+    path
+        Target ``.nc`` path; its directory is created if needed.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+    """
+    return _write_atomic(ds, Path(path), _float_encoding(ds))
+
+
+def read_case(path: str | os.PathLike[str]) -> xr.Dataset:
+    """Load a case file fully into memory (the file is closed on return)."""
+    try:
+        with xr.open_dataset(path, engine="netcdf4") as ds:
+            return ds.load()
+    except (OSError, ValueError) as exc:
+        raise ArchiveError(
+            f"cannot read case file {path}: {exc}; delete it and rerun the sweep to recompute it"
+        ) from exc
+
+
+def stale_temporaries(directory: Path, stem: str) -> list[Path]:
+    """Temporary files a killed writer of ``<stem>.nc`` may have left in ``directory``."""
+    return sorted(Path(directory).glob(f".{stem}.*.tmp"))
+
+
+@dataclass(frozen=True)
+class CaseEntry:
+    """Where one case goes in the archive and where its file is.
+
+    Attributes
+    ----------
+    index
+        Position along the case dimensions (one integer per dimension).
+    case_id
+        Stable identifier (hash of model and parameters).
+    path
+        The case file ``cases/<case_id>.nc`` (may not exist: the case did not run).
+    """
+
+    index: tuple[int, ...]
+    case_id: str
+    path: Path
+
+
+def _upsample(values: np.ndarray, samples: int) -> np.ndarray:
+    """Periodic Fourier re-sampling to more samples along the last axis.
+
+    Exact for a band-limited periodic signal: cases of one archive may differ in
+    ``samples_per_rev`` and their one-revolution histories share the finest azimuth grid.
+    """
+    n = values.shape[-1]
+    if n == samples:
+        return values
+    spectrum = np.fft.rfft(values, axis=-1)
+    if n % 2 == 0:
+        # The Nyquist bin of the coarse grid is a cosine that the fine grid resolves: half of
+        # it belonged to the negative frequency.
+        spectrum[..., -1] *= 0.5
+    return np.fft.irfft(spectrum, n=samples, axis=-1) * (samples / n)
+
+
+def consolidate(
+    path: str | os.PathLike[str],
+    *,
+    dims: Mapping[str, int],
+    coords: Mapping[str, xr.Variable],
+    cases: Sequence[CaseEntry],
+    constants: Mapping[str, xr.Variable],
+    attrs: Mapping[str, str],
+) -> Path:
+    """Gather all case files into one CF-1.11 netCDF archive, written atomically.
+
+    Parameters
+    ----------
+    path
+        Archive to write.
+    dims
+        Case dimensions in order and their sizes, e.g. ``{"tuning_order": 3,
+        "fuselage_stiffness_scale": 2}`` or ``{"case": 4}``.
+    coords
+        Coordinates on the case dimensions (swept values, ``case_name``, …) with ``units`` and
+        ``long_name``.
+    cases
+        Every case of the study; a case whose file is missing gets status ``not_run``.
+    constants
+        Scalar variables (parameters common to all cases), with ``units`` and ``long_name``.
+    attrs
+        Global attributes (see :func:`global_attrs`).
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+    """
+    shape = tuple(dims.values())
+    case_dims = tuple(dims)
+    status = np.full(shape, STATUS_NOT_RUN, dtype=np.int8)
+    message = np.full(shape, "not run: no case file; rerun the sweep to compute it", dtype=object)
+    case_ids = np.full(shape, "", dtype=object)
+    wall_time = np.full(shape, np.nan)
+    loaded: list[tuple[tuple[int, ...], xr.Dataset]] = []
+    for entry in cases:
+        case_ids[entry.index] = entry.case_id
+        if not entry.path.exists():
+            continue
+        try:
+            ds = read_case(entry.path)
+        except ArchiveError as exc:
+            status[entry.index], message[entry.index] = STATUS_FAILED, str(exc)
+            continue
+        status[entry.index] = int(ds.attrs.get("status", STATUS_FAILED))
+        message[entry.index] = str(ds.attrs.get("message", ""))
+        wall_time[entry.index] = float(ds.attrs.get("wall_time", np.nan))
+        if status[entry.index] == STATUS_OK:
+            loaded.append((entry.index, ds))
+
+    # Layout of the per-case variables: the union over finished cases, at the finest azimuth
+    # resolution among them (cases may differ in samples_per_rev).
+    samples = max((ds.sizes.get("time_in_rev", 0) for _, ds in loaded), default=0)
+    template: dict[str, xr.Variable] = {}
+    inner_coords: dict[str, xr.Variable] = {}
+    for _, ds in loaded:
+        for name, var in ds.data_vars.items():
+            if name not in template:
+                sizes = {d: (samples if d == "time_in_rev" else var.sizes[d]) for d in var.dims}
+                template[name] = xr.Variable(var.dims, np.empty(tuple(sizes.values()), var.dtype),
+                                             var.attrs)
+        for name, coord in ds.coords.items():
+            if name != "psi" and name not in inner_coords:
+                inner_coords[name] = coord.variable
+    if samples:
+        inner_coords["psi"] = _psi_coord(samples)
+
+    data_vars: dict[str, xr.Variable] = {}
+    encoding: dict[str, dict[str, Any]] = {}
+    for name, var in template.items():
+        is_int = np.issubdtype(var.dtype, np.integer)
+        values = np.full(shape + var.shape, INT_FILL if is_int else np.nan,
+                         dtype=np.int32 if is_int else float)
+        for index, ds in loaded:
+            if name not in ds:
+                continue
+            case_values = ds[name].transpose(*var.dims).values
+            if "time_in_rev" in var.dims:
+                case_values = _upsample(case_values, samples)
+            if case_values.shape != var.shape:
+                raise ArchiveError(
+                    f"variable {name!r} has shape {case_values.shape} in case "
+                    f"{case_ids[index]} but {var.shape} in others; the cases of one archive "
+                    "must come from one model layout"
+                )
+            values[index] = case_values
+        data_vars[name] = xr.Variable(case_dims + var.dims, values, var.attrs)
+        encoding[name] = {"_FillValue": INT_FILL} if is_int else dict(COMPRESSION)
+
+    data_vars["status"] = xr.Variable(case_dims, status, {
+        "units": "1", "long_name": "case status",
+        "flag_values": FLAG_VALUES, "flag_meanings": FLAG_MEANINGS,
+    })
+    data_vars["message"] = xr.Variable(case_dims, message, {
+        "units": "1", "long_name": "failure message (exception type and text), empty if ok",
+    })
+    data_vars["case_id"] = xr.Variable(case_dims, case_ids, {
+        "units": "1",
+        "long_name": "case identifier (hash of model and parameters); file cases/<case_id>.nc",
+    })
+    data_vars["run_wall_time"] = xr.Variable(case_dims, wall_time, {
+        "units": "s", "long_name": "wall-clock time of the case on its worker",
+    })
+    encoding["run_wall_time"] = dict(COMPRESSION)
+    data_vars.update(constants)
+
+    archive = xr.Dataset(data_vars, coords={**coords, **inner_coords}, attrs=dict(attrs))
+    for name, var in archive.variables.items():
+        if np.issubdtype(var.dtype, np.floating) and name not in encoding:
+            encoding[name] = dict(COMPRESSION)
+        # xarray writes bools as int8 with a dtype attribute; give them no fill value.
+        if var.dtype == bool:
+            encoding.setdefault(name, {})["_FillValue"] = None
+    return _write_atomic(archive, Path(path), encoding)
+
+
+def open_archive(path: str | os.PathLike[str]) -> xr.Dataset:
+    """Load a consolidated archive fully into memory (the file is closed on return)."""
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"archive not found: {path}")
+    try:
+        with xr.open_dataset(path, engine="netcdf4") as ds:
+            return ds.load()
+    except (OSError, ValueError) as exc:
+        raise ArchiveError(f"cannot read archive {path}: {exc}") from exc

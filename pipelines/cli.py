@@ -1,0 +1,196 @@
+"""The ``bifilar`` command line.
+
+::
+
+    bifilar sweep STUDY.toml --out DIR [--workers N | --scheduler ADDRESS] [--retry-failed]
+    bifilar plot ARCHIVE --out DIR [--format png --format pdf]
+    bifilar run [--out DIR] [--workers N | --scheduler ADDRESS]
+
+A problem the user can fix (an invalid study file, a parameter out of range, a missing file, an
+unreachable scheduler) prints one line ``error: ...`` to stderr and exits with status 2, never a
+traceback; a traceback means a bug. An interrupted sweep exits with status 130 and resumes when
+the same command is run again.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import shlex
+import signal
+from collections.abc import Iterator
+from importlib import resources
+from importlib.resources.abc import Traversable
+from pathlib import Path
+from typing import NoReturn
+
+import click
+
+from pipelines.archive import ArchiveError, code_version
+from pipelines.study_commands import collar, pendulum
+from pipelines.sweep import StudyError, SweepError, run_sweep
+from studies.parameters import ParameterError
+
+DEFAULT_STUDY = "default_study.toml"
+EXIT_USER_ERROR = 2
+EXIT_INTERRUPTED = 130
+
+# Errors whose message tells the user what to fix; anything else is a bug and keeps its traceback.
+USER_ERRORS = (StudyError, ParameterError, ArchiveError, SweepError, FileNotFoundError)
+
+
+def default_study() -> Traversable:
+    """The built-in study: the paper's Table 1 cases 0–3 on the hub model."""
+    return resources.files("studies") / DEFAULT_STUDY
+
+
+def _fail(message: str) -> NoReturn:
+    click.echo(f"error: {' '.join(message.split())}", err=True)
+    raise click.exceptions.Exit(EXIT_USER_ERROR)
+
+
+@contextlib.contextmanager
+def _terminate_as_interrupt() -> Iterator[None]:
+    """Handle SIGTERM (a batch system's time limit, ``kill``) like Ctrl-C: shut the cluster down
+    and write the partial archive instead of dying mid-way."""
+
+    def interrupt(signum: int, frame: object) -> None:
+        raise KeyboardInterrupt
+
+    try:
+        previous = signal.signal(signal.SIGTERM, interrupt)
+    except ValueError:  # not the main thread (e.g. called from a notebook worker thread)
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
+@contextlib.contextmanager
+def _user_errors() -> Iterator[None]:
+    """Turn the errors a user can act on into one ``error:`` line and exit status 2."""
+    try:
+        yield
+    except USER_ERRORS as exc:
+        _fail(str(exc))
+    except KeyboardInterrupt:
+        click.echo("error: interrupted; finished cases are kept, run the same command again "
+                   "to resume", err=True)
+        raise click.exceptions.Exit(EXIT_INTERRUPTED) from None
+
+
+def _check_exclusive(workers: int | None, scheduler: str | None) -> None:
+    if workers is not None and scheduler is not None:
+        _fail("--workers and --scheduler are mutually exclusive: --workers starts a local "
+              "cluster, --scheduler uses a running one")
+
+
+def _command_line(ctx: click.Context, *args: str) -> str:
+    """The command as the user could type it again, for the archive's ``history``."""
+    return f"{ctx.command_path} {shlex.join(args)}"
+
+
+def _cluster_args(workers: int | None, scheduler: str | None) -> list[str]:
+    if workers is not None:
+        return ["--workers", str(workers)]
+    if scheduler is not None:
+        return ["--scheduler", scheduler]
+    return []
+
+
+workers_option = click.option(
+    "--workers", type=click.IntRange(min=1), default=None, metavar="N",
+    help="Worker processes of a new local dask cluster (default 2).",
+)
+scheduler_option = click.option(
+    "--scheduler", default=None, metavar="ADDRESS",
+    help="Address of a running dask scheduler, e.g. tcp://host:8786 (exclusive with --workers).",
+)
+
+
+@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(code_version(), prog_name="bifilar")
+def main() -> None:
+    """Bifilar pendulum absorbers: parameter studies, archives and report plots."""
+
+
+# --- studies and archives ---------------------------------------------------------------------
+
+
+@main.command()
+@click.argument("study", type=click.Path(dir_okay=False, path_type=Path))
+@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False, path_type=Path),
+              help="Output directory: cases/ and archive.nc.")
+@workers_option
+@scheduler_option
+@click.option("--retry-failed", is_flag=True, help="Recompute cases recorded as failed.")
+@click.option("--quiet", is_flag=True, help="No progress lines.")
+@click.pass_context
+def sweep(ctx: click.Context, study: Path, out_dir: Path, workers: int | None,
+          scheduler: str | None, retry_failed: bool, quiet: bool) -> None:
+    """Run every case of STUDY (a TOML study file) and write DIR/archive.nc.
+
+    The study's model is a registry name (model = "hub") or a plug-in given as
+    model = "package.module:SPEC". Cases already in DIR/cases are not recomputed, so an
+    interrupted sweep resumes when run again. Prints the archive path.
+    """
+    _check_exclusive(workers, scheduler)
+    command = _command_line(ctx, str(study), "--out", str(out_dir),
+                            *_cluster_args(workers, scheduler),
+                            *(["--retry-failed"] if retry_failed else []))
+    with _user_errors(), _terminate_as_interrupt():
+        archive = run_sweep(study, out_dir, workers=workers, scheduler=scheduler,
+                            progress=not quiet, retry_failed=retry_failed, command=command)
+    click.echo(str(archive))
+
+
+@main.command()
+@click.argument("archive", type=click.Path(dir_okay=False, path_type=Path))
+@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False, path_type=Path),
+              help="Directory for the figures.")
+@click.option("--format", "formats", multiple=True, type=click.Choice(["png", "pdf", "svg"]),
+              default=("png", "pdf"), show_default=True, help="File format (repeatable).")
+def plot(archive: Path, out_dir: Path, formats: tuple[str, ...]) -> None:
+    """Write the report figures of ARCHIVE into DIR; prints their paths."""
+    from pipelines.plots import plot_archive  # matplotlib only when plotting
+
+    with _user_errors():
+        paths = plot_archive(archive, out_dir, formats=formats)
+    for path in paths:
+        click.echo(str(path))
+
+
+@main.command()
+@click.option("--out", "out_dir", default=Path("results"), show_default=True,
+              type=click.Path(file_okay=False, path_type=Path),
+              help="Output directory: cases/, archive.nc and plots/.")
+@workers_option
+@scheduler_option
+@click.pass_context
+def run(ctx: click.Context, out_dir: Path, workers: int | None, scheduler: str | None) -> None:
+    """Run the built-in study (the paper's Table 1, cases 0-3) and plot it into DIR/plots."""
+    from pipelines.plots import plot_archive
+
+    _check_exclusive(workers, scheduler)
+    command = _command_line(ctx, "--out", str(out_dir), *_cluster_args(workers, scheduler))
+    with _user_errors(), _terminate_as_interrupt(), resources.as_file(default_study()) as study:
+        archive = run_sweep(study, out_dir, workers=workers, scheduler=scheduler,
+                            command=command)
+        paths = plot_archive(archive, out_dir / "plots")
+    click.echo(str(archive))
+    for path in paths:
+        click.echo(str(path))
+
+
+# --- single-model commands ----------------------------------------------------------------------
+# The validation studies: `bifilar collar` (paper Figs. 10-12) and `bifilar pendulum` (Eq. 7).
+main.add_command(collar)
+main.add_command(pendulum)
+
+
+# --- end of single-model commands ---------------------------------------------------------------
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,686 @@
+"""Parameter studies: a TOML study file, its cases run on dask, one archive at the end.
+
+A study file names a model, the parameters common to all cases, and either a Cartesian
+``[sweep]`` (each key becomes an archive dimension, in file order) or an explicit list of
+``[[cases]]`` (archived along one ``case`` dimension)::
+
+    model = "hub"                 # registry name, or "package.module:ATTRIBUTE"
+    title = "Table 1 of the paper"
+    [fixed]                       # parameters common to all cases
+    hub_speed = 27.0
+    [sweep]                       # Cartesian product, in this order
+    tuning_order = [2.8, 3.0, 3.2]
+    fuselage_stiffness_scale = [0.5, 1.0]
+
+    # ... or, instead of [sweep]:
+    [[cases]]
+    name = "0: locked"
+    bifilar = "locked"
+
+Models
+    ``model`` is either a name known to :mod:`studies.registry` (``"hub"``) or a plug-in given as
+    ``"module:attribute"``, the import path of a :class:`~studies.parameters.ModelSpec` (e.g.
+    ``"mylab.rotors:SPEC"``). The plug-in form needs nothing registered: every dask worker imports
+    the module itself, so it works on a remote cluster as long as the module is importable there.
+
+Everything in the file is validated before any case starts (:func:`load_study`), including each
+case's complete parameter set through ``ModelSpec.complete`` (which rejects impossible geometry).
+
+Each case runs as :func:`run_case` on a dask worker, which writes ``cases/<case_id>.nc``
+atomically; the id is a hash of the model name and the complete parameters, so running the same
+command again after an interruption computes only the cases without a file. After a change to a
+model's code, delete ``cases/`` (or use a new output directory) to recompute.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import difflib
+import hashlib
+import importlib
+import itertools
+import json
+import os
+import shlex
+import sys
+import time
+import tomllib
+import traceback
+from collections.abc import Iterator, Mapping
+from concurrent.futures import CancelledError
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+import xarray as xr
+
+from pipelines.archive import (
+    RESERVED_NAMES,
+    STATUS_FAILED,
+    STATUS_OK,
+    CaseEntry,
+    case_summary,
+    consolidate,
+    global_attrs,
+    stale_temporaries,
+    write_case,
+)
+from studies.parameters import ModelSpec, Param, ParameterError
+from studies.registry import available, get_model
+
+CASES_DIR = "cases"
+ARCHIVE_NAME = "archive.nc"
+DEFAULT_WORKERS = 2
+# Length of the hex case id: 64 bits makes an accidental clash within one study negligible.
+CASE_ID_LENGTH = 16
+
+TOP_LEVEL_KEYS = ("model", "title", "description", "fixed", "sweep", "cases")
+
+
+class StudyError(ValueError):
+    """The study file is unusable; the message names the file, the entry and the fix."""
+
+
+class SweepError(RuntimeError):
+    """The sweep could not run (e.g. no connection to the dask scheduler)."""
+
+
+class ModelFailure(RuntimeError):
+    """The model returned a result marked ``status = "failed"``."""
+
+
+def resolve_model(ref: str) -> ModelSpec:
+    """The :class:`ModelSpec` for a registry name or a ``"module:attribute"`` reference.
+
+    Parameters
+    ----------
+    ref
+        ``"hub"`` (a name in :mod:`studies.registry`) or ``"package.module:SPEC"``.
+
+    Raises
+    ------
+    StudyError
+        If the model cannot be found or imported.
+    """
+    if ":" in ref:
+        module_name, _, attr = ref.partition(":")
+        try:
+            spec = getattr(importlib.import_module(module_name), attr)
+        except (ImportError, AttributeError) as exc:
+            raise StudyError(
+                f"cannot load model {ref!r}: {type(exc).__name__}: {exc} "
+                "(a plug-in model is 'importable.module:ATTRIBUTE'; is its module on the path?)"
+            ) from exc
+        if not isinstance(spec, ModelSpec):
+            raise StudyError(f"model {ref!r} is a {type(spec).__name__}, not a ModelSpec")
+        return spec
+    try:
+        return get_model(ref)
+    except ParameterError as exc:
+        raise StudyError(str(exc)) from exc
+    except ImportError as exc:
+        raise StudyError(
+            f"cannot load model {ref!r}: {type(exc).__name__}: {exc}; available models: "
+            f"{', '.join(available())}"
+        ) from exc
+
+
+def make_case_id(model: str, params: Mapping[str, Any]) -> str:
+    """Stable identifier of a case: a hash of the model name and its complete parameters.
+
+    JSON with sorted keys and Python's shortest float repr is the same in every process and
+    session, so a rerun finds the files of the cases it already computed.
+    """
+    text = json.dumps({"model": model, "parameters": dict(params)}, sort_keys=True)
+    return hashlib.sha256(text.encode()).hexdigest()[:CASE_ID_LENGTH]
+
+
+def _format_value(value: Any) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, float):
+        return f"{value:g}"
+    return str(value)
+
+
+@dataclass(frozen=True)
+class Case:
+    """One case of a study.
+
+    Attributes
+    ----------
+    label
+        Human-readable name: the ``name`` of an explicit case, ``"k=v, …"`` for a sweep.
+    params
+        Complete, validated parameters (defaults filled in).
+    case_id
+        :func:`make_case_id` of the model and ``params``.
+    index
+        Position along the archive's case dimensions.
+    """
+
+    label: str
+    params: dict[str, Any]
+    case_id: str
+    index: tuple[int, ...]
+
+    def path(self, cases_dir: Path) -> Path:
+        return Path(cases_dir) / f"{self.case_id}.nc"
+
+
+@dataclass(frozen=True)
+class Study:
+    """A validated study file.
+
+    Attributes
+    ----------
+    path, text
+        The study file and its full text (archived as the ``study`` attribute).
+    model_ref
+        The ``model`` entry as written (registry name or ``module:attribute``); workers resolve
+        it again.
+    spec
+        The model.
+    title
+        The ``title`` entry (or a default made from the model and file names).
+    kind
+        ``"sweep"`` (Cartesian product) or ``"cases"`` (explicit list).
+    sweep
+        For a sweep, the validated values of each swept parameter in file order.
+    cases
+        All cases, in archive order.
+    """
+
+    path: Path
+    text: str
+    model_ref: str
+    spec: ModelSpec
+    title: str
+    kind: Literal["sweep", "cases"]
+    sweep: dict[str, list[Any]]
+    cases: tuple[Case, ...]
+
+    def dims(self) -> dict[str, int]:
+        """Archive case dimensions and their sizes."""
+        if self.kind == "sweep":
+            return {name: len(values) for name, values in self.sweep.items()}
+        return {"case": len(self.cases)}
+
+    def _param_values(self, name: str, values: list[Any]) -> np.ndarray:
+        kind = self.spec.parameters[name].kind
+        return np.array(values, dtype=object if kind is str else kind)
+
+    def archive_coords(self) -> tuple[dict[str, xr.Variable], dict[str, xr.Variable]]:
+        """Coordinates on the case dimensions, and scalar variables of the common parameters.
+
+        Every parameter of the model appears once: as a coordinate if it varies between
+        cases, as a scalar variable if not, with the units and long_name of its declaration.
+        """
+        params = self.spec.parameters
+        coords: dict[str, xr.Variable] = {}
+        if self.kind == "sweep":
+            for name, values in self.sweep.items():
+                coords[name] = xr.Variable(name, self._param_values(name, values),
+                                           params[name].attrs())
+        else:
+            coords["case"] = xr.Variable("case", np.arange(len(self.cases)),
+                                         {"units": "1", "long_name": "case number"})
+            coords["case_name"] = xr.Variable(
+                "case", np.array([c.label for c in self.cases], dtype=object),
+                {"units": "1", "long_name": "case name from the study file"},
+            )
+        constants: dict[str, xr.Variable] = {}
+        for name, param in params.items():
+            if name in coords:
+                continue
+            values = [c.params[name] for c in self.cases]
+            if all(v == values[0] for v in values):
+                constants[name] = xr.Variable((), self._param_values(name, values[0]),
+                                              param.attrs())
+            else:
+                coords[name] = xr.Variable("case", self._param_values(name, values),
+                                           param.attrs())
+        return coords, constants
+
+
+def _suggest(name: str, known: Mapping[str, Param]) -> str:
+    close = difflib.get_close_matches(name, list(known), n=1)
+    return f" (did you mean {close[0]!r}?)" if close else ""
+
+
+def _check_value(where: str, spec: ModelSpec, name: str, value: Any) -> Any:
+    """One parameter value checked against its declaration, located in the study file."""
+    if name not in spec.parameters:
+        raise StudyError(
+            f"{where}: unknown parameter {name!r} for model {spec.name!r}"
+            f"{_suggest(name, spec.parameters)}; known: {', '.join(sorted(spec.parameters))}"
+        )
+    try:
+        return spec.parameters[name].check(name, value)
+    except ParameterError as exc:
+        raise StudyError(f"{where}: {exc}") from exc
+
+
+def _table(where: str, value: Any) -> dict[str, Any]:
+    if not isinstance(value, dict):
+        raise StudyError(f"{where} must be a table of parameter = value entries, "
+                         f"not {type(value).__name__}")
+    return value
+
+
+def load_study(path: str | os.PathLike[str]) -> Study:
+    """Read and validate a study file; nothing runs if this raises.
+
+    Parameters
+    ----------
+    path
+        TOML study file (see the module documentation for its layout).
+
+    Returns
+    -------
+    Study
+        The validated study with every case's complete parameter set.
+
+    Raises
+    ------
+    StudyError
+        With a one-line message naming the file and the problem: unreadable or invalid TOML
+        (with its line), missing or unknown model, unknown top-level key or parameter, wrong
+        type or out-of-range value, empty or non-list sweep value, a key both swept and fixed,
+        both or neither of ``[sweep]`` and ``[[cases]]``, duplicate cases, and any case whose
+        complete parameter set the model rejects (``ModelSpec.complete``).
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise StudyError(f"study file not found: {path}") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise StudyError(f"cannot read study file {path}: {exc}") from exc
+    try:
+        doc = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise StudyError(f"{path}: not valid TOML: {exc}") from exc
+    src = str(path)
+
+    unknown = [k for k in doc if k not in TOP_LEVEL_KEYS]
+    if unknown:
+        raise StudyError(f"{src}: unknown top-level key(s) {', '.join(map(repr, unknown))}; "
+                         f"allowed: {', '.join(TOP_LEVEL_KEYS)}")
+    model_ref = doc.get("model")
+    if model_ref is None:
+        raise StudyError(f"{src}: no model given; add e.g. model = \"hub\" "
+                         f"(available: {', '.join(available())}, or 'module:ATTRIBUTE')")
+    if not isinstance(model_ref, str):
+        raise StudyError(f"{src}: model = {model_ref!r} must be a string, e.g. model = \"hub\"")
+    try:
+        spec = resolve_model(model_ref)
+    except StudyError as exc:
+        raise StudyError(f"{src}: {exc}") from exc
+    reserved = sorted(RESERVED_NAMES & set(spec.parameters))
+    if reserved:
+        raise StudyError(f"{src}: model {spec.name!r} has parameter(s) {', '.join(reserved)} "
+                         "whose names the archive uses for its own variables; rename them")
+    title = doc.get("title", f"{spec.name} study {path.stem}")
+    if not isinstance(title, str):
+        raise StudyError(f"{src}: title = {title!r} must be a string")
+
+    fixed = {
+        name: _check_value(f"{src} [fixed]", spec, name, value)
+        for name, value in _table(f"{src}: [fixed]", doc.get("fixed", {})).items()
+    }
+    has_sweep, has_cases = "sweep" in doc, "cases" in doc
+    if has_sweep == has_cases:
+        raise StudyError(
+            f"{src}: give either a [sweep] table (Cartesian product) or a [[cases]] list, "
+            + ("not both" if has_sweep else "found neither")
+        )
+
+    def complete(label: str, given: dict[str, Any]) -> dict[str, Any]:
+        try:
+            return spec.complete(given)
+        except ParameterError as exc:
+            raise StudyError(f"{src}: case {label}: {exc}") from exc
+
+    cases: list[Case] = []
+    sweep: dict[str, list[Any]] = {}
+    if has_sweep:
+        kind: Literal["sweep", "cases"] = "sweep"
+        for name, values in _table(f"{src}: [sweep]", doc["sweep"]).items():
+            where = f"{src} [sweep]"
+            if name in fixed:
+                raise StudyError(f"{where}: {name!r} is both swept and in [fixed]; remove one")
+            if not isinstance(values, list):
+                raise StudyError(f"{where}: {name} = {values!r} must be a list of values, "
+                                 f"e.g. {name} = [{values!r}]; single values go in [fixed]")
+            if not values:
+                raise StudyError(f"{where}: {name} = [] is an empty list; give at least one value")
+            checked = [_check_value(where, spec, name, v) for v in values]
+            if len(set(checked)) != len(checked):
+                raise StudyError(f"{where}: {name} = {values!r} repeats a value; "
+                                 "each swept value becomes one archive coordinate")
+            sweep[name] = checked
+        if not sweep:
+            raise StudyError(f"{src}: [sweep] is empty; give at least one swept parameter")
+        for index in itertools.product(*(range(len(v)) for v in sweep.values())):
+            point = {name: sweep[name][i] for name, i in zip(sweep, index, strict=True)}
+            label = ", ".join(f"{k}={_format_value(v)}" for k, v in point.items())
+            params = complete(label, {**fixed, **point})
+            cases.append(Case(label, params, make_case_id(spec.name, params), index))
+    else:
+        kind = "cases"
+        entries = doc["cases"]
+        if not isinstance(entries, list) or not all(isinstance(e, dict) for e in entries):
+            raise StudyError(f"{src}: cases must be a list of [[cases]] tables")
+        if not entries:
+            raise StudyError(f"{src}: cases = [] is an empty list; add [[cases]] tables")
+        names: set[str] = set()
+        for i, entry in enumerate(entries):
+            label = entry.get("name", f"case {i}")
+            if not isinstance(label, str):
+                raise StudyError(f"{src}: case {i}: name = {label!r} must be a string")
+            if label in names:
+                raise StudyError(f"{src}: two cases are named {label!r}; names must be unique")
+            names.add(label)
+            where = f"{src} case {label!r}"
+            given = dict(fixed)
+            for name, value in entry.items():
+                if name == "name":
+                    continue
+                if name in fixed:
+                    raise StudyError(f"{where}: {name!r} is also in [fixed]; "
+                                     "fixed parameters are common to all cases, remove one")
+                given[name] = _check_value(where, spec, name, value)
+            params = complete(repr(label), given)
+            cases.append(Case(label, params, make_case_id(spec.name, params), (i,)))
+
+    seen: dict[str, str] = {}
+    for case in cases:
+        if case.case_id in seen:
+            raise StudyError(f"{src}: cases {seen[case.case_id]!r} and {case.label!r} have "
+                             "identical parameters; remove one")
+        seen[case.case_id] = case.label
+    return Study(path, text, model_ref, spec, title, kind, sweep, tuple(cases))
+
+
+def _one_line(exc: BaseException) -> str:
+    text = " ".join(str(exc).split())
+    return f"{type(exc).__name__}: {text}" if text else type(exc).__name__
+
+
+def _failure_case(case_id: str, model: str, params: Mapping[str, Any], message: str,
+                  wall_time: float, tb: str = "") -> xr.Dataset:
+    return xr.Dataset(attrs={
+        "case_id": case_id, "model": model, "parameters": json.dumps(dict(params), sort_keys=True),
+        "status": np.int8(STATUS_FAILED), "message": message, "wall_time": wall_time,
+        "traceback": tb,
+    })
+
+
+def run_case(model_name: str, params: Mapping[str, Any], case_file: str) -> dict[str, Any]:
+    """Run one case and write its case file atomically; the dask task of a sweep.
+
+    Any exception of the model (or a result with ``attrs["status"] == "failed"``) is caught
+    and recorded as a failed case with its message: one bad case must not stop an overnight
+    sweep. Only a small summary travels back to the client; the data stay in the file.
+
+    Parameters
+    ----------
+    model_name
+        Registry name or ``"module:attribute"`` (resolved in the worker process).
+    params
+        Complete parameters of the case.
+    case_file
+        Path of the case file to write, ``<out>/cases/<case_id>.nc``.
+
+    Returns
+    -------
+    dict
+        ``case_id``, ``status`` (0 ok, 1 failed), ``message`` (``""`` if ok) and ``wall_time``
+        (s).
+    """
+    start = time.perf_counter()
+    case_id = Path(case_file).stem
+    status, message, tb = STATUS_OK, "", ""
+    summary = xr.Dataset()
+    try:
+        spec = resolve_model(model_name)
+        result = spec.run(spec.complete(params))
+        reported = str(result.attrs.get("status", "ok")).lower()
+        if reported in ("failed", str(STATUS_FAILED)):
+            raise ModelFailure(str(result.attrs.get("message", "model reported failure")))
+        summary = case_summary(result)
+    except Exception as exc:
+        status, message, tb = STATUS_FAILED, _one_line(exc), traceback.format_exc()
+        summary = xr.Dataset()
+    wall_time = time.perf_counter() - start
+    summary.attrs = {
+        "case_id": case_id, "model": model_name,
+        "parameters": json.dumps(dict(params), sort_keys=True),
+        "status": np.int8(status), "message": message, "wall_time": wall_time, "traceback": tb,
+    }
+    try:
+        write_case(summary, case_file)
+    except Exception as exc:
+        if status != STATUS_OK:
+            raise
+        # The result could not be written (e.g. a variable netCDF cannot hold): keep a failure
+        # record so the archive says why, rather than a case that silently never finishes.
+        status, message = STATUS_FAILED, f"cannot write case file: {_one_line(exc)}"
+        write_case(_failure_case(case_id, model_name, params, message, wall_time,
+                                 traceback.format_exc()), case_file)
+    return {"case_id": case_id, "status": status, "message": message, "wall_time": wall_time}
+
+
+def _case_done(path: Path, retry_failed: bool) -> bool:
+    if not path.exists():
+        return False
+    if not retry_failed:
+        return True
+    try:
+        with xr.open_dataset(path, engine="netcdf4") as ds:
+            return int(ds.attrs.get("status", STATUS_FAILED)) == STATUS_OK
+    except (OSError, ValueError):
+        return False  # unreadable: compute it again
+
+
+@contextlib.contextmanager
+def _connect(workers: int | None, scheduler: str | None) -> Iterator[Any]:
+    """A dask client: on an existing scheduler, or on a new local cluster of processes."""
+    # Imported here: ``bifilar plot`` and study validation need no dask.
+    from distributed import Client, LocalCluster
+
+    if scheduler is not None:
+        try:
+            client = Client(scheduler)
+        except (OSError, TimeoutError) as exc:
+            raise SweepError(f"cannot connect to the dask scheduler at {scheduler}: "
+                             f"{_one_line(exc)}") from exc
+        with client:
+            yield client
+        return
+    # One thread per worker process: the solver holds the GIL, so processes give the
+    # parallelism. Port 0 for the dashboard so that two sweeps on one machine do not collide.
+    with (
+        LocalCluster(n_workers=workers or DEFAULT_WORKERS, threads_per_worker=1, processes=True,
+                     dashboard_address=":0") as cluster,
+        Client(cluster) as client,
+    ):
+        yield client
+
+
+def run_sweep(
+    study_path: str | os.PathLike[str],
+    out_dir: str | os.PathLike[str],
+    workers: int | None = None,
+    scheduler: str | None = None,
+    progress: bool = True,
+    *,
+    retry_failed: bool = False,
+    command: str | None = None,
+) -> Path:
+    """Run every case of a study on dask and consolidate the results into one archive.
+
+    Parameters
+    ----------
+    study_path
+        TOML study file, validated completely before any case starts.
+    out_dir
+        Output directory: case files go to ``out_dir/cases/<case_id>.nc``, the archive to
+        ``out_dir/archive.nc``. Cases whose file already exists are not recomputed (resume).
+    workers
+        Worker processes of the local cluster (default 2). Exclusive with ``scheduler``.
+    scheduler
+        Address of a running dask scheduler, e.g. ``"tcp://host:8786"``; its workers must be
+        able to import the project and the model.
+    progress
+        Print one line per finished case to stderr: ``[k/N] case <label> ok (12.3 s)``.
+    retry_failed
+        Also recompute cases whose existing file records a failure.
+    command
+        Command line recorded in the archive's ``history`` (default: ``sys.argv``).
+
+    Returns
+    -------
+    pathlib.Path
+        The consolidated archive.
+
+    Raises
+    ------
+    StudyError
+        If the study file is invalid (nothing has run).
+    SweepError
+        If the dask scheduler cannot be reached.
+    """
+    if workers is not None and scheduler is not None:
+        raise StudyError("give either a number of workers or a scheduler address, not both")
+    if workers is not None and workers < 1:
+        raise StudyError(f"workers = {workers}: need at least one worker")
+    study = load_study(study_path)
+    out_dir = Path(out_dir)
+    cases_dir = out_dir / CASES_DIR
+    cases_dir.mkdir(parents=True, exist_ok=True)
+
+    def say(line: str) -> None:
+        if progress:
+            print(line, file=sys.stderr, flush=True)
+
+    total = len(study.cases)
+    todo = [c for c in study.cases if not _case_done(c.path(cases_dir), retry_failed)]
+    finished = total - len(todo)
+    if finished:
+        say(f"resuming: {finished} of {total} case(s) already finished in {cases_dir}, "
+            "not recomputed")
+    interrupted = False
+    if todo:
+        for case in todo:
+            # Left by a writer killed mid-write; this case is about to be rewritten anyway.
+            for tmp in stale_temporaries(cases_dir, case.case_id):
+                tmp.unlink(missing_ok=True)
+        try:
+            _run_cases(study, todo, cases_dir, workers, scheduler, finished, total, say)
+        except KeyboardInterrupt:
+            interrupted = True
+
+    archive = consolidate_study(study, out_dir, command=command)
+    if interrupted:
+        # A partial archive (unfinished cases flagged not_run) is worth having after a batch
+        # system's time limit; the case files make the next run resume.
+        say(f"interrupted: partial archive {archive} (unfinished cases have status not_run); "
+            f"finished cases are kept in {cases_dir}, run the same command again to resume")
+        raise KeyboardInterrupt
+    say(f"archive written: {archive}")
+    return archive
+
+
+def consolidate_study(study: Study | str | os.PathLike[str], out_dir: str | os.PathLike[str],
+                      command: str | None = None) -> Path:
+    """Write ``out_dir/archive.nc`` from the case files present now; run nothing.
+
+    Cases without a file get status ``not_run``: this shows the partial results of a sweep that
+    is still running or was interrupted.
+
+    Parameters
+    ----------
+    study
+        A validated :class:`Study` or the path of its file.
+    out_dir
+        The sweep's output directory (holding ``cases/``).
+    command
+        Command line recorded in the archive's ``history`` (default: ``sys.argv``).
+
+    Returns
+    -------
+    pathlib.Path
+        The archive.
+    """
+    if not isinstance(study, Study):
+        study = load_study(study)
+    out_dir = Path(out_dir)
+    if command is None:
+        command = shlex.join([Path(sys.argv[0]).name, *sys.argv[1:]])
+    coords, constants = study.archive_coords()
+    return consolidate(
+        out_dir / ARCHIVE_NAME,
+        dims=study.dims(),
+        coords=coords,
+        cases=[CaseEntry(c.index, c.case_id, c.path(out_dir / CASES_DIR)) for c in study.cases],
+        constants=constants,
+        attrs=global_attrs(title=study.title, model=study.spec.name, study_text=study.text,
+                           command=command),
+    )
+
+
+def _run_cases(study: Study, todo: list[Case], cases_dir: Path, workers: int | None,
+               scheduler: str | None, finished: int, total: int, say: Any) -> None:
+    from distributed import as_completed
+
+    with _connect(workers, scheduler) as client:
+        info = client.scheduler_info()
+        dashboard = "dashboard" in info.get("services", {})
+        say(f"running {len(todo)} case(s) of {study.path} on {len(info.get('workers', {}))} "
+            "dask worker(s)" + (f"; dashboard {client.dashboard_link}" if dashboard else ""))
+        paths = [str(c.path(cases_dir)) for c in todo]
+        futures = client.map(
+            run_case,
+            [study.model_ref] * len(todo),
+            [c.params for c in todo],
+            paths,
+            key=[f"bifilar-case-{c.case_id}" for c in todo],
+            pure=False,
+        )
+        by_key = {f.key: c for f, c in zip(futures, todo, strict=True)}
+        for future in as_completed(futures):
+            case = by_key[future.key]
+            try:
+                result = future.result()
+            except CancelledError:
+                # Lost with the scheduler, not the case's fault: leave it without a file, so it
+                # is archived as not_run and computed by the next run.
+                future.release()
+                finished += 1
+                say(f"[{finished}/{total}] case {case.label} cancelled (not run)")
+                continue
+            except Exception as exc:
+                # The worker itself died (KilledWorker) or the file could not be written: the
+                # case is recorded as failed here so the archive says why.
+                result = {"status": STATUS_FAILED, "message": _one_line(exc),
+                          "wall_time": float("nan")}
+                with contextlib.suppress(OSError):
+                    write_case(_failure_case(case.case_id, study.model_ref, case.params,
+                                             result["message"], float("nan"),
+                                             traceback.format_exc()),
+                               case.path(cases_dir))
+            future.release()
+            finished += 1
+            ok = result["status"] == STATUS_OK
+            say(f"[{finished}/{total}] case {case.label} {'ok' if ok else 'failed'} "
+                f"({result['wall_time']:.1f} s)" + ("" if ok else f": {result['message']}"))
+
+
+if __name__ == "__main__":
+    # ``python -m pipelines.sweep STUDY --out DIR [--workers N | --scheduler ADDRESS]``
+    from pipelines.cli import main
+
+    main(["sweep", *sys.argv[1:]], prog_name="bifilar")

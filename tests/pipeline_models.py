@@ -1,0 +1,215 @@
+"""A small physical model in the hub model's output layout, for the pipeline tests.
+
+Hub (effective in-plane mass ``M``) on an isotropic fuselage spring ``K·scale`` with damping, and
+the four bifilars lumped into one absorber mass ``m`` on a spring tuned, in the fixed frame, to
+``(tuning_order + 1)·Ω``: a bifilar tuned to nP in the rotating frame acts on the (n+1)P
+progressive whirl of the hub. The hub is driven by in-plane forces at 1P (a small progressive
+imbalance) and 4P (elliptical: progressive and regressive whirl, which the rotating frame sees at
+3P and 5P). The steady state is exact, in closed form per harmonic (complex amplitudes of the
+2×2 dynamic stiffness), then sampled into the dataset layout of ``studies.hub``; the expected
+Fourier harmonics are therefore known analytically (:func:`steady_state`).
+
+Pin angle of bifilar ``b`` (at azimuth ψ + b·90°): the absorber's displacement relative to the
+hub, tangential at that bifilar, over the bifilar's effective pendulum length ``D - d`` (hole
+minus pin diameter). It is a kinematic stand-in, not bifilar dynamics.
+
+Test hooks: ``delay`` sleeps (to interrupt a sweep mid-run), ``run_log`` appends one line per
+run (to count computations across processes), ``fail`` raises or returns a result marked failed,
+and a negative ``absorber_damping_ratio`` makes the system unstable, which :func:`run` detects.
+
+Workers find this model as ``model = "tests.pipeline_models:SPEC"`` (the repository root must be
+on their ``sys.path``).
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from studies.parameters import ModelSpec, Param, ParameterError
+from studies.registry import register
+
+HUB_MASS = 500.0  # kg, hub and rotor in-plane effective mass
+ABSORBER_MASS = 50.0  # kg, four bifilar tuning masses
+FUSELAGE_FREQUENCY = 4.4  # per rev at the nominal stiffness and 27 rad/s (above the 4P forcing)
+FUSELAGE_DAMPING_RATIO = 0.03
+NOMINAL_SPEED = 27.0  # rad/s, sets the fuselage stiffness
+IMBALANCE = 0.05  # 1P force relative to the 4P force
+ELLIPTICITY = 0.6  # y/x ratio of the 4P force
+N_BIFILARS = 4
+
+PARAMETERS: dict[str, Param] = {
+    "hub_speed": Param(27.0, "rad s-1", "rotor speed", minimum=0.0, exclusive_minimum=True),
+    "bifilar": Param("free", "1", "bifilar absorbers free or locked to the hub",
+                     choices=("free", "locked")),
+    "tuning_order": Param(3.0, "1", "bifilar tuning order, rotating frame", minimum=1.0,
+                          maximum=10.0),
+    "fuselage_stiffness_scale": Param(1.0, "1", "fuselage stiffness relative to nominal",
+                                      minimum=0.0, exclusive_minimum=True),
+    "absorber_damping_ratio": Param(0.02, "1", "absorber damping ratio", minimum=-0.5,
+                                    maximum=0.5),
+    "force_amplitude": Param(2000.0, "N", "4P in-plane hub force amplitude", minimum=0.0),
+    "pin_diameter": Param(0.02, "m", "bifilar pin diameter", minimum=0.0, exclusive_minimum=True),
+    "hole_diameter": Param(0.03, "m", "bifilar tracking hole diameter", minimum=0.0,
+                           exclusive_minimum=True),
+    "samples_per_rev": Param(64, "1", "samples per revolution", minimum=20),
+    "revolutions": Param(2, "1", "revolutions recorded", minimum=1),
+    "transient_revolutions": Param(3, "1", "revolutions before recording", minimum=0),
+    "delay": Param(0.0, "s", "wall-clock delay of a run (tests)", minimum=0.0, maximum=60.0),
+    "run_log": Param("", "1", "file to which each run appends a line (tests)"),
+    "fail": Param("none", "1", "test failure mode", choices=("none", "raise", "report")),
+}
+
+
+def check(params: dict[str, Any]) -> None:
+    """Reject a pin that does not fit in its hole (impossible geometry)."""
+    if params["pin_diameter"] >= params["hole_diameter"]:
+        raise ParameterError(
+            f"pin_diameter = {params['pin_diameter']:g} m must be smaller than hole_diameter = "
+            f"{params['hole_diameter']:g} m: the pin would not fit in its tracking hole"
+        )
+
+
+def forcing(params: dict[str, Any]) -> dict[int, tuple[complex, complex]]:
+    """Complex amplitudes (N) of the hub force per harmonic: F_x(t) = Re(F e^{i k ψ})."""
+    f = params["force_amplitude"]
+    return {
+        1: (IMBALANCE * f + 0j, -1j * IMBALANCE * f),
+        4: (f + 0j, -1j * ELLIPTICITY * f),
+    }
+
+
+def _matrices(params: dict[str, Any]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Mass, damping and stiffness of one in-plane direction (hub, absorber)."""
+    omega_f = FUSELAGE_FREQUENCY * NOMINAL_SPEED
+    k_f = HUB_MASS * omega_f**2 * params["fuselage_stiffness_scale"]
+    c_f = 2 * FUSELAGE_DAMPING_RATIO * np.sqrt(k_f * HUB_MASS)
+    if params["bifilar"] == "locked":
+        m = np.array([[HUB_MASS + ABSORBER_MASS]])
+        return m, np.array([[c_f]]), np.array([[k_f]])
+    omega_a = (params["tuning_order"] + 1) * params["hub_speed"]
+    k_a = ABSORBER_MASS * omega_a**2
+    c_a = 2 * params["absorber_damping_ratio"] * np.sqrt(k_a * ABSORBER_MASS)
+    m = np.diag([HUB_MASS, ABSORBER_MASS])
+    c = np.array([[c_f + c_a, -c_a], [-c_a, c_a]])
+    k = np.array([[k_f + k_a, -k_a], [-k_a, k_a]])
+    return m, c, k
+
+
+def growth_rate(params: dict[str, Any]) -> float:
+    """Largest real part of the free-vibration eigenvalues (1/s); > 0 means unstable."""
+    m, c, k = _matrices(params)
+    n = m.shape[0]
+    minv = np.linalg.inv(m)
+    state = np.block([[np.zeros((n, n)), np.eye(n)], [-minv @ k, -minv @ c]])
+    return float(np.linalg.eigvals(state).real.max())
+
+
+def steady_state(params: dict[str, Any]) -> dict[int, dict[str, tuple[complex, complex]]]:
+    """Exact steady state per harmonic k: complex (x, y) amplitudes, ``x(t) = Re(X e^{ikψ})``.
+
+    Keys: ``hub`` and ``absorber`` (m, fixed frame), ``force`` (N, transmitted to the
+    fuselage: fuselage spring and damper force).
+    """
+    m, c, k = _matrices(params)
+    # The fuselage spring and damper are what remains of the hub row when the hub and the
+    # absorber move together.
+    k_f, c_f = k[0].sum(), c[0].sum()
+    out: dict[int, dict[str, tuple[complex, complex]]] = {}
+    for h, (fx, fy) in forcing(params).items():
+        w = h * params["hub_speed"]
+        z = k - w**2 * m + 1j * w * c
+        rhs = np.zeros((k.shape[0], 2), dtype=complex)
+        rhs[0] = fx, fy
+        sol = np.linalg.solve(z, rhs)
+        hub = sol[0]
+        absorber = sol[-1]
+        force = (k_f + 1j * w * c_f) * hub
+        out[h] = {
+            "hub": (complex(hub[0]), complex(hub[1])),
+            "absorber": (complex(absorber[0]), complex(absorber[1])),
+            "force": (complex(force[0]), complex(force[1])),
+        }
+    return out
+
+
+def run(params: dict[str, Any]) -> xr.Dataset:
+    """Sample the exact steady state into the hub model's dataset layout."""
+    if params["run_log"]:
+        with open(params["run_log"], "a") as log:
+            log.write(json.dumps(params, sort_keys=True) + "\n")
+    time.sleep(params["delay"])
+    if params["fail"] == "raise":
+        raise RuntimeError("failure requested by the test (fail = 'raise')")
+    rate = growth_rate(params)
+    if rate > 0:
+        raise RuntimeError(
+            f"unstable: free vibrations grow at {rate:.3g} 1/s (absorber_damping_ratio = "
+            f"{params['absorber_damping_ratio']:g}), so there is no steady periodic response"
+        )
+    omega = params["hub_speed"]
+    n, revs = params["samples_per_rev"], params["revolutions"]
+    skip = params["transient_revolutions"]
+    period = 2 * np.pi / omega
+    t = (skip + np.arange(revs * n) / n) * period
+    psi = omega * t
+
+    def signal(amplitudes: dict[int, complex]) -> np.ndarray:
+        return sum((a * np.exp(1j * h * psi)).real for h, a in amplitudes.items())
+
+    state = steady_state(params)
+    series = {
+        f"{name}_{axis}": signal({h: s[name][i] for h, s in state.items()})
+        for name in ("hub", "absorber", "force")
+        for i, axis in enumerate("xy")
+    }
+    hx, hy = series["hub_x"], series["hub_y"]
+    rx, ry = series["absorber_x"] - hx, series["absorber_y"] - hy
+    length = params["hole_diameter"] - params["pin_diameter"]
+    bifilar_psi = psi[None, :] + np.arange(N_BIFILARS)[:, None] * np.pi / 2
+    pins = np.degrees((-rx * np.sin(bifilar_psi) + ry * np.cos(bifilar_psi)) / length)
+
+    def var(values: np.ndarray, units: str, long_name: str, dims: Any = "time") -> Any:
+        return (dims, values, {"units": units, "long_name": long_name})
+
+    ds = xr.Dataset(
+        {
+            "hub_x_fixed": var(hx, "m", "hub x displacement, fixed frame"),
+            "hub_y_fixed": var(hy, "m", "hub y displacement, fixed frame"),
+            "hub_x_rotating": var(hx * np.cos(psi) + hy * np.sin(psi), "m",
+                                  "hub x displacement, rotating frame"),
+            "hub_y_rotating": var(-hx * np.sin(psi) + hy * np.cos(psi), "m",
+                                  "hub y displacement, rotating frame"),
+            "hub_force_x_fixed": var(series["force_x"], "N", "hub force x, fixed frame"),
+            "hub_force_y_fixed": var(series["force_y"], "N", "hub force y, fixed frame"),
+            "bifilar_cm_x_fixed": var(series["absorber_x"], "m",
+                                      "bifilar centre of mass x, fixed frame"),
+            "bifilar_cm_y_fixed": var(series["absorber_y"], "m",
+                                      "bifilar centre of mass y, fixed frame"),
+            "pin_angle": var(pins, "degree", "bifilar pin angle", ("bifilar", "time")),
+        },
+        coords={
+            "time": ("time", t, {"units": "s", "long_name": "time"}),
+            "bifilar": ("bifilar", np.arange(N_BIFILARS),
+                        {"units": "1", "long_name": "bifilar number"}),
+        },
+        attrs={"hub_speed": omega, "revolutions": revs, "samples_per_rev": n,
+               "transient_revolutions": skip},
+    )
+    if params["fail"] == "report":
+        ds.attrs.update(status="failed", message="solver did not converge (test report)")
+    return ds
+
+
+SPEC = ModelSpec(
+    name="pipeline-test-2dof",
+    parameters=PARAMETERS,
+    run=run,
+    check=check,
+    description="hub on a fuselage spring with a tuned absorber, exact steady state",
+)
+register(SPEC)
