@@ -274,5 +274,5 @@ def pendulum(hole, hole_diameter, tuning_order, hub_speed, arm_radius, cm_offset
         _fail(f"simulation failed: {ds.attrs['message']}")
     click.echo(f"tuning order measured   {float(ds.frequency_order):.6f}")
     click.echo(f"tuning order linear     {float(ds.frequency_order_linear):.6f}")
-    click.echo(f"Jacobi integral change  {float(np.ptp(ds.jacobi.values) / abs(float(ds.jacobi[0]))):.2e} "
-               "(relative)")
+    jac = ds.jacobi.values
+    click.echo(f"Jacobi integral change  {np.ptp(jac) / abs(jac[0]):.2e} (relative)")

@@ -235,7 +235,7 @@ class CurveSlidingSet(HolonomicGroup):
         hit = self._memo_eval.get(key)
         if hit is not None:
             return hit
-        eta, p, p1, _, r, dr, dk, dl = self._state(q)
+        _eta, p, p1, _, r, dr, dk, dl = self._state(q)
         nj, mj = self.nj, self.mj
         c = np.empty((nj, mj))
         g = self._g0.copy()
@@ -296,7 +296,7 @@ class CurveSlidingSet(HolonomicGroup):
         return g.reshape(nj * self.mj, self.nc)
 
     def hessian(self, q: Array, lam: Array) -> Array:
-        eta, p, p1, p2, r, dr, dk, dl = self._state(q)
+        eta, _p, p1, p2, r, dr, dk, dl = self._state(q)
         nj, nc, je = self.nj, self.nc, self.je
         lam = lam.reshape(nj, self.mj)
         ld = lam[:, :3]

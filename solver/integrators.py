@@ -174,7 +174,7 @@ class Midpoint(Integrator):
             return np.concatenate(parts)
 
         def jacobian(x):
-            dq, qf, qm, mu, nu = unpack(x)
+            dq, qf, qm, mu, _nu = unpack(x)
             k = 0.5 * c * s.stiffness_values(qm)
             jq, jv = s.applied_jacobians(qm, dq / h, tm)
             d = -c * (0.5 * jq + jv / h)
@@ -245,7 +245,7 @@ class GeneralizedAlpha(Integrator):
             return dq, qi + dq, vconst + h * g * anew, anew, x[n : n + mh], x[n + mh :]
 
         def residual(x):
-            dq, qf, vf, anew, mu, nu = unpack(x)
+            dq, qf, vf, _anew, mu, nu = unpack(x)
             c, gf = s.constraint_and_jacobian(qf, tf)
             r1 = s.M @ dq + mconst + sc * (s.gradient(qf) - s.applied(qf, vf, tf))
             r1 += s.gmul_T(gf, mu)
@@ -257,7 +257,7 @@ class GeneralizedAlpha(Integrator):
             return np.concatenate(parts)
 
         def jacobian(x):
-            dq, qf, vf, anew, mu, nu = unpack(x)
+            _dq, qf, vf, _anew, mu, _nu = unpack(x)
             k = sc * s.stiffness_values(qf)
             jq, jv = s.applied_jacobians(qf, vf, tf)
             d = -sc * (jq + jv * g / (b * h))

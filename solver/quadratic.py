@@ -166,7 +166,7 @@ class QuadraticConstraints:
 
     def quadratic_rate_term(self, q, v, t) -> NDArray[np.float64]:
         """C̈ − (∂C/∂q)·q̈ for a motion through (q, v) at time t (exact for these rows)."""
-        h0, g0, _ = self._scaled(t, 0)
+        h0, _g0, _ = self._scaled(t, 0)
         out = np.zeros(self.m)
         out += np.bincount(self.h_row, 2 * h0 * v[self.h_i] * v[self.h_j], minlength=self.m)
         if self.time_dependent:

@@ -62,7 +62,7 @@ def simulate(model, t_end: float, h: float, scheme: str = "ep", rho_inf: float |
         raise ValueError(f"record_every = {record_every!r} must be ≥ 1")
     s = system if system is not None else System(model)
     integ = make_integrator(s, scheme, h, rho_inf=rho_inf, reuse_jacobian=reuse_jacobian)
-    n_steps = int(round(t_end / h))
+    n_steps = round(t_end / h)
     rec = _Recorder(s, reactions)
     rec.record(integ, 0)
     energy = [integ.energy()]

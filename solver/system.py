@@ -16,7 +16,6 @@ import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from solver.bodies import PointMass, PrescribedBody, RigidBody
-from solver.forces import gonzalez
 from solver.quadratic import QuadraticBuilder, VecExpr
 from solver.timefunctions import TimeFunction
 
@@ -166,7 +165,7 @@ class System:
         for b in self.bodies:
             o = self.offset[b]
             if isinstance(b, PrescribedBody):
-                x, r, vel, w, *_ = b.motion(0.0)
+                _x, r, vel, w, *_ = b.motion(0.0)
                 v[o : o + 3] = vel
                 v[o + 3 : o + 12] = np.cross(w, np.asarray(r).T).ravel()
             elif isinstance(b, PointMass):

@@ -70,12 +70,14 @@ class Param:
             return value
         if kind is str:
             if not isinstance(value, str):
-                raise ParameterError(f"{name} = {value!r}: expected a string, {self.describe_range()}")
+                raise ParameterError(
+                    f"{name} = {value!r}: expected a string, {self.describe_range()}")
             if self.choices is not None and value not in self.choices:
                 raise ParameterError(f"{name} = {value!r}: must be {self.describe_range()}")
             return value
         if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise ParameterError(f"{name} = {value!r}: expected a number in {self.describe_range()}")
+            raise ParameterError(
+                f"{name} = {value!r}: expected a number in {self.describe_range()}")
         if kind is int:
             if float(value) != int(value):
                 raise ParameterError(f"{name} = {value!r}: expected a whole number")

@@ -1,0 +1,116 @@
+"""The hub with four bifilars (issue: the overnight sweep), run as users run it.
+
+The paper's Table 1 (cases 0-3) goes through the real pipeline: a LocalCluster of 2 worker
+processes, one case file per case, the consolidated CF archive, the report plots. The physics
+checks are the paper's reported trends, with the margins we measured:
+
+* free and tuned to 3P, the rotating-frame 3P hub displacement falls by at least 90 % against
+  locked (a tuned absorber leaves only what its damping lets through);
+* tuned to 3.3P (10 % detuned) it absorbs clearly less;
+* opposite bifilars 0 and 2 swing 180° out of phase at 3P, by several degrees;
+* halving the fuselage stiffness changes the fixed-frame 4P hub force by tens of percent.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from pipelines.cli import default_study
+from pipelines.sweep import run_sweep
+from studies.hub import SPEC, build
+from studies.parameters import ParameterError
+
+
+@pytest.fixture(scope="module")
+def table1(tmp_path_factory):
+    out = tmp_path_factory.mktemp("table1")
+    study = out / "study.toml"
+    study.write_text(default_study().read_text())
+    archive = run_sweep(study, out / "run", workers=2, progress=False)
+    ds = xr.open_dataset(archive)
+    yield ds, out / "run"
+    ds.close()
+
+
+def _case(ds, name_start):
+    names = [str(n) for n in ds.case_name.values]
+    return next(i for i, n in enumerate(names) if n.startswith(name_start))
+
+
+def test_table1_all_cases_ok(table1):
+    ds, _ = table1
+    assert ds.sizes["case"] == 4
+    assert (ds.status.values == 0).all(), ds.message.values
+
+
+def test_tuned_bifilars_remove_3p_hub_motion(table1):
+    ds, _ = table1
+    amp = ds.hub_displacement_rotating.sel(harmonic=3)
+    locked = float(amp.isel(case=_case(ds, "0")).max())
+    tuned = float(amp.isel(case=_case(ds, "1")).max())
+    detuned = float(amp.isel(case=_case(ds, "2")).max())
+    # measured: tuned/locked = 0.089 (91 % reduction), detuned/locked = 0.59
+    assert tuned <= 0.1 * locked
+    assert detuned >= 3 * tuned
+
+
+def test_opposite_pins_out_of_phase_at_3p(table1):
+    ds, _ = table1
+    i = _case(ds, "1")
+    c = ds.pin_angle_cos.isel(case=i).sel(harmonic=3).values
+    s = ds.pin_angle_sin.isel(case=i).sel(harmonic=3).values
+    z = c - 1j * s  # complex 3P amplitude of each bifilar
+    amp = np.abs(z)
+    assert amp.min() > 2.0  # several degrees (measured 5.2°)
+    assert np.abs(z[0] + z[2]) <= 1e-3 * amp[0]  # 0 and 2 swing in opposition
+    assert np.abs(z[1] + z[3]) <= 1e-3 * amp[1]
+
+
+def test_fuselage_stiffness_changes_hub_forces(table1):
+    ds, _ = table1
+    f = ds.hub_force_fixed.sel(harmonic=4)
+    nominal = float(f.isel(case=_case(ds, "1")).max())
+    soft = float(f.isel(case=_case(ds, "3")).max())
+    assert abs(soft / nominal - 1) >= 0.1  # "tens of percent"
+
+
+def test_archive_is_cf_and_plots_exist(table1):
+    ds, run_dir = table1
+    from pipelines.plots import plot_archive
+
+    paths = plot_archive(run_dir / "archive.nc", run_dir / "plots")
+    assert any(p.suffix == ".png" for p in paths) and any(p.suffix == ".pdf" for p in paths)
+    assert all(p.stat().st_size > 1000 for p in paths)
+    assert ds.attrs["Conventions"].startswith("CF-1.11")
+    for key in ("title", "source", "history", "study"):
+        assert ds.attrs.get(key), key
+    for name, var in ds.variables.items():
+        if name in ds.dims and var.dtype.kind in "OUS":
+            continue
+        assert "long_name" in var.attrs, name
+    assert ds.status.attrs["flag_meanings"] == "ok failed not_run"
+    assert ds.hub_displacement_rotating.attrs["units"] == "m"
+    assert ds.hub_force_fixed.attrs["units"] == "N"
+    assert ds.pin_angle_amplitude.attrs["units"] == "degree"
+
+
+def test_hub_parameters_validated_before_running():
+    with pytest.raises(ParameterError, match="fuselage_stiffness_scale"):
+        SPEC.complete({"fuselage_stiffness_scale": -1.0})
+    with pytest.raises(ParameterError, match="bifilar"):
+        SPEC.complete({"bifilar": "loose"})
+    with pytest.raises(ParameterError, match="unknown parameter"):
+        SPEC.complete({"tuning_ordr": 3.0})
+
+
+def test_hub_model_has_no_redundant_constraints():
+    """One bifilar adds exactly one degree of freedom; the hub adds two (in-plane)."""
+    from solver.system import System
+
+    p = SPEC.complete({})
+    model, *_ = build(p)
+    s = System(model)
+    # unknowns minus holonomic and nonholonomic rows = degrees of freedom
+    assert s.n - s.mh - s.mn == 2 + 4 * 1
