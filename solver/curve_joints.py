@@ -210,6 +210,8 @@ class CurveSlidingSet(HolonomicGroup):
                 r, dr = self.Q @ r, self.Q @ dr
             else:
                 r = dr = None
+            if self.rot:  # the rotation rows' bilinear forms W(η) and dW/dη, reused per step
+                r, dr = (r, self._w(r)), (dr, self._w(dr))
             hit = (p, p1, p2, r, dr)
             if len(self._memo_curve) > 16:
                 self._memo_curve.clear()
@@ -248,13 +250,13 @@ class CurveSlidingSet(HolonomicGroup):
         g[:, self._pr, self._pc] = np.repeat(p, 3, axis=1)  # ∂/∂d_α^k = p*_α I
         g[:, :3, self.je] = np.einsum("ja,jai->ji", p1, dk)
         if self.rot:
-            w = self._w(r)
-            x = np.einsum("jbi,jgi->jbg", dk, dl)  # X_βγ = d_β^k·d_γ^ℓ
+            w, dw = r[1], dr[1]
+            x = dk @ np.transpose(dl, (0, 2, 1))  # X_βγ = d_β^k·d_γ^ℓ
             c[:, 3:] = np.einsum("jrbg,jbg->jr", w, x)
             g[:, 3:, 3:12] = np.einsum("jrbg,jgi->jrbi", w, dl).reshape(nj, -1, 9)
             g[:, 3:, self.dl : self.dl + 9] = np.einsum("jrbg,jbi->jrgi", w, dk).reshape(
                 nj, -1, 9)
-            g[:, 3:, self.je] = np.einsum("jrbg,jbg->jr", self._w(dr), x)
+            g[:, 3:, self.je] = np.einsum("jrbg,jbg->jr", dw, x)
         out = (c.ravel(), g.reshape(nj * mj, self.nc))
         if len(self._memo_eval) > 16:
             self._memo_eval.clear()
@@ -283,12 +285,11 @@ class CurveSlidingSet(HolonomicGroup):
         g[:, :3, self.je] = np.einsum("ja,jai->ji", sec, dkbar)
         if self.rot:
             dlbar = 0.5 * (dli + dlf)
-            wi, wf = self._w(ri), self._w(rf)
-            dw = np.where(small[:, None, None, None], 0.5 * (self._w(dri) + self._w(drf)),
+            wi, wf = ri[1], rf[1]
+            dw = np.where(small[:, None, None, None], 0.5 * (dri[1] + drf[1]),
                           (wf - wi) / safe[:, None, None, None])
             wbar = 0.5 * (wi + wf)
-            xbar = 0.5 * (np.einsum("jbi,jgi->jbg", dki, dli) + np.einsum("jbi,jgi->jbg",
-                                                                          dkf, dlf))
+            xbar = 0.5 * (dki @ np.transpose(dli, (0, 2, 1)) + dkf @ np.transpose(dlf, (0, 2, 1)))
             g[:, 3:, 3:12] = np.einsum("jrbg,jgi->jrbi", wbar, dlbar).reshape(nj, -1, 9)
             g[:, 3:, self.dl : self.dl + 9] = np.einsum("jrbg,jbi->jrgi", wbar, dkbar).reshape(
                 nj, -1, 9)
@@ -306,7 +307,8 @@ class CurveSlidingSet(HolonomicGroup):
         h[:, je, je] = np.einsum("ji,ja,jai->j", ld, p2, dk)
         if self.rot:
             lr = lam[:, 3:]
-            w, dw = self._w(r), self._w(dr)
+            w, dw = r[1], dr[1]
+            r, dr = r[0], dr[0]
             h[:, je, 3:12] += np.einsum("jr,jrbg,jgi->jbi", lr, dw, dl).reshape(nj, 9)
             h[:, je, self.dl : self.dl + 9] += np.einsum("jr,jrbg,jbi->jgi", lr, dw,
                                                          dk).reshape(nj, 9)

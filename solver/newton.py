@@ -32,6 +32,7 @@ class NewtonResult:
     iterations: int
     factorizations: int
     message: str = ""
+    stale_refactored: bool = False  # factors reused from an earlier call had to be replaced
 
 
 class LinearSolver:
@@ -64,6 +65,7 @@ def newton(residual: Callable[[NDArray], NDArray], jacobian: Callable[[NDArray],
     x = x0.copy()
     nfact = 0
     fresh = False
+    started_stale = reuse and solver.lu is not None
     if not reuse or solver.lu is None:
         msg = solver.factor(jacobian(x))
         nfact += 1
@@ -92,7 +94,7 @@ def newton(residual: Callable[[NDArray], NDArray], jacobian: Callable[[NDArray],
             continue
         # converged, or stagnating at the roundoff floor (tiny updates that no longer shrink)
         if converged(x, dx) or (rate > 0.5 and converged(x, dx * ROUNDOFF_FLOOR)):
-            return NewtonResult(x, True, it, nfact)
+            return NewtonResult(x, True, it, nfact, stale_refactored=started_stale and nfact > 0)
         if rate > SLOW_RATE or (not fresh and (it >= 4 or rate > STALE_RATE)):
             if fresh and rate >= 1.0 and it > 3:
                 return NewtonResult(x, False, it, nfact,

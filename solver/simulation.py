@@ -32,7 +32,7 @@ def simulate(model, t_end: float, h: float, scheme: str = "ep", rho_inf: float |
              record_every: int = 1, reactions: bool = True,
              callback: Callable[[Integrator], None] | None = None,
              reuse_jacobian: bool = True, system: System | None = None,
-             record_initial: bool = False) -> Simulation:
+             record_initial: bool = False, tol: float | None = None) -> Simulation:
     """Integrate ``model`` from t = 0 to ``t_end`` (s) with step ``h`` (s).
 
     Parameters
@@ -44,6 +44,9 @@ def simulate(model, t_end: float, h: float, scheme: str = "ep", rho_inf: float |
     record_every
         Store the configuration every this many steps (energy, work, violation and Newton
         iterations are stored every step).
+    tol
+        Newton tolerance on q relative to its scale (default
+        :data:`solver.integrators.CONSTRAINT_TOL`, 1e-14).
     callback
         Called with the integrator after every converged step (e.g. to record study outputs),
         and once before the first step if ``record_initial``.
@@ -61,7 +64,8 @@ def simulate(model, t_end: float, h: float, scheme: str = "ep", rho_inf: float |
     if record_every < 1:
         raise ValueError(f"record_every = {record_every!r} must be ≥ 1")
     s = system if system is not None else System(model)
-    integ = make_integrator(s, scheme, h, rho_inf=rho_inf, reuse_jacobian=reuse_jacobian)
+    kw = {} if tol is None else {"tol": tol}
+    integ = make_integrator(s, scheme, h, rho_inf=rho_inf, reuse_jacobian=reuse_jacobian, **kw)
     n_steps = round(t_end / h)
     rec = _Recorder(s, reactions)
     rec.record(integ, 0)

@@ -80,22 +80,23 @@ def check_run(ds, curve, theta0, inertia, period_tol=1e-5):
     assert energy <= 1e-10, energy
     viol = float(ds.constraint_violation.max())
     assert viol <= 1e-10, viol
-    # the motion is the oscillation asked for: θ returns to ±θ0 (energy conservation on a
-    # fixed curve; measured |max θ − θ0| ≤ 1e-4 degree, limited by the sampling of the turning
-    # point: θ0 (ωh)²/8 ≈ 4e-5 θ0)
-    assert abs(float(ds.theta.max()) - theta0) < 1e-3 * theta0
+    # the motion is the oscillation asked for: θ swings to −θ0 (energy conservation on a
+    # symmetric curve). Measured |min θ + θ0| ≤ 5.8e-8 degree: with h = T/1000 exactly the
+    # turning point falls within 0.003 h of a sample; 1e-5 θ0 still allows a 0.1 h offset
+    assert abs(float(ds.theta.min()) + theta0) < 1e-5 * theta0
     return err, energy, viol
 
 
 # ---------------------------------------------------------------------------- default runs
 # Measured at the default resolution (1000 steps per period, 2 periods), relative period
-# error / max energy change / max violation:
-#   circle  10° case 1: 3.33e-6 / 3.7e-13 / 1.7e-15   circle  80° case 1: 5.67e-6 / … / …
-#   cycloid 40° case 1: 4.06e-6 / 4.3e-12 / 4.8e-15   cycloid 80° case 1: 6.01e-6 / … / …
-#   circle  10° case 2: 3.33e-6 / 1.3e-12 / 1.4e-14   circle  80° case 2: 5.67e-6 / … / …
-#   cycloid 40° case 2: …                              cycloid 80° case 2: 7.0e-7 / 3.7e-13 / …
-# The period error is the EP phase error (ωh)²/12 = 3.3e-6 at 1000 steps, growing with the
-# amplitude; the 1e-5 limit is the issue's.
+# error / max relative energy change / max violation (m):
+#  circle  10° case 1: 3.33e-6 / 7.3e-13 / 1.1e-15  circle  80° case 1: 5.67e-6 / 4.9e-12 / 1.3e-15
+#  cycloid 40° case 1: 4.06e-6 / 5.4e-12 / 8.9e-16  cycloid 80° case 1: 6.01e-6 / 4.2e-11 / 5.6e-16
+#  circle  10° case 2: 3.33e-6 / 2.1e-13 / 1.5e-15  circle  80° case 2: 5.67e-6 / 4.6e-13 / 1.9e-15
+#  cycloid 40° case 2: 3.92e-6 / 3.4e-14 / 1.1e-15  cycloid 80° case 2: 7.0e-7 / 2.4e-12 / 8.9e-16
+# Full grid 10°–80°: period errors 3.3e-6 to 6.0e-6. The period error is the EP phase error
+# (ωh)²/12 = 3.3e-6 at 1000 steps, growing with the amplitude; the 1e-5 limit is the issue's.
+# The energy change grows with θ0 on the cycloid (4.2e-11 at 80°, case 1): a 2.4× margin.
 SUBSET = [("circle", 10.0), ("circle", 80.0), ("cycloid", 40.0), ("cycloid", 80.0)]
 
 
@@ -118,8 +119,8 @@ def test_period_energy_violation_full_grid(curve, theta0, inertia):
 # ---------------------------------------------------------------------------- convergence
 def test_convergence_order_ep():
     """Observed order of the period error as the step is halved (EP: 2, the midpoint rule).
-    Measured (circle 60°, case 2): errors … at 100, 200, 400 steps per period,
-    fitted order …"""
+    Measured (circle 60°, case 2): errors 4.634e-4, 1.159e-4, 2.896e-5 at 100, 200, 400 steps
+    per period, fitted order 2.00."""
     steps = np.array([100, 200, 400])
     t_ref = circle_period(60.0, IP2)
     errors = []
@@ -130,16 +131,18 @@ def test_convergence_order_ep():
     order = -np.polyfit(np.log(steps), np.log(errors), 1)[0]
     assert order >= 1.9, (errors, order)
     assert order <= 2.1, (errors, order)  # and not better than second order (EP is 2nd)
-    # at 400 steps the error is the phase error (ωh)²/12 ≈ 2.1e-5 times an amplitude factor
+    # at 400 steps the error is the phase error (ωh)²/12 = 2.1e-5 times an amplitude factor
+    # (1.4 at 60°)
     assert errors[-1] < 1e-4
 
 
 # ---------------------------------------------------------------------------- other schemes
-@pytest.mark.parametrize("scheme, tol", [("galpha", 3e-5), ("ed", 3e-5)])
+@pytest.mark.parametrize("scheme, tol", [("galpha", 2e-5), ("ed", 5e-5)])
 def test_other_schemes_reach_analytic_period(scheme, tol):
     """ED and generalized-α at the default resolution: second order too, with their own phase
-    errors (measured …), so a looser limit than EP's; energy is not conserved exactly (ED
-    decays it: measured …)."""
+    errors, so looser limits than EP's 1e-5. Measured (cycloid 40°, case 2): period error
+    generalized-α (ρ∞ = 0.8) 5.97e-6, ED (ρ∞ = 0) 2.10e-5 (circle 40° case 1: 6.02e-6,
+    1.97e-5); energy change 4.7e-6 (generalized-α), decay 1.4e-4 (ED, never growing)."""
     theta0 = 40.0
     ds = run({"curve": "cycloid", "theta0": theta0, "inertia": IP2, "scheme": scheme})
     assert ds.attrs["converged"] == 1
@@ -169,13 +172,14 @@ def test_eq27_matches_energy_derivation(theta0):
 
 
 def test_case2_cycloid_period_grows_towards_the_cusp():
-    """Errata 4: with Ip > 0 the cusp is an equilibrium, the period grows without bound;
-    Fig. 12's 'nearly constant for θ0 ≤ 50°' (within 2 %: measured 1.6 %)."""
+    """Errata 4: with Ip > 0 the cusp is an equilibrium and the period grows without bound,
+    while the paper's Fig. 12 shows it 'nearly constant' up to 50°. Measured: T(10°) = 2.130 s,
+    T(50°) = 2.192 s (+2.9 %), T(80°) = 2.551 s, T(89°) = 3.531 s (+66 %)."""
     t = [analytic.collar_cycloid_period(A_CYC, G, np.radians(x), M, IP2)
          for x in (10.0, 50.0, 80.0, 89.0)]
     assert np.all(np.diff(t) > 0)
-    assert t[1] / t[0] - 1 < 0.02
-    assert t[3] > 1.6 * t[0]  # measured 3.53 s against 2.13 s
+    assert t[1] / t[0] - 1 < 0.05
+    assert t[3] / t[0] - 1 > 0.5
 
 
 @pytest.mark.parametrize("theta0", [10.0, 45.0, 80.0, 120.0, 170.0])
@@ -216,7 +220,7 @@ def test_cli_collar_run(tmp_path):
         assert ds.s.attrs["units"] == "m"
         assert float(ds.period) == pytest.approx(measured, rel=1e-8)
         # s is the arc length travelled: R θ on the circle (Eq. 25 integrated by the
-        # midpoint rule, O(h²): measured 4e-8 m)
+        # midpoint rule, O(h²): measured 1.1e-7 m)
         th = np.radians(ds.theta.values)
         np.testing.assert_allclose(ds.s.values - ds.s.values[0], R * (th - th[0]), atol=1e-6)
 
@@ -232,7 +236,7 @@ def test_cli_collar_bad_input(tmp_path, args, name):
     res = CliRunner().invoke(main, ["collar", *args, "--out", str(out)])
     assert res.exit_code == 2, res.output
     assert "Traceback" not in res.output
-    assert not isinstance(res.exception, Exception) or isinstance(res.exception, SystemExit)
+    assert res.exception is None or isinstance(res.exception, SystemExit)
     lines = [ln for ln in res.output.splitlines() if name in ln]
     assert lines, res.output
     err = [ln for ln in res.output.splitlines() if ln.startswith("error:")]
