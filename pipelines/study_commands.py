@@ -30,6 +30,21 @@ def _write(ds: xr.Dataset, out: Path) -> None:
     os.replace(tmp, out)
 
 
+def _finish(fig, ax, stem: Path) -> list[Path]:
+    """Grid, legend, layout; save as PNG and PDF; close."""
+    import matplotlib.pyplot as plt
+
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    paths = []
+    for ext in ("png", "pdf"):
+        paths.append(stem.with_suffix(f".{ext}"))
+        fig.savefig(paths[-1], dpi=150)
+    plt.close(fig)
+    return paths
+
+
 def _pool_map(fn, items: list, workers: int) -> list:
     if workers <= 1:
         return [fn(i) for i in items]
@@ -93,14 +108,7 @@ def collar_figures(out_dir: Path, steps_per_period: int = 1000, workers: int = 2
         ax.set_xlabel("release angle θ0 (degree)")
         ax.set_ylabel("period T (s)")
         ax.set_title(f"Collar, case {case} (Ip = {ip:g} kg·m²)")
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=8)
-        fig.tight_layout()
-        for ext in ("png", "pdf"):
-            p = out_dir / f"collar_case{case}.{ext}"
-            fig.savefig(p, dpi=150)
-            paths.append(p)
-        plt.close(fig)
+        paths += _finish(fig, ax, out_dir / f"collar_case{case}")
     return paths
 
 
@@ -197,15 +205,7 @@ def pendulum_figures(out_dir: Path, base: dict[str, Any], workers: int = 2) -> l
     ax.set_xlabel("amplitude (degree)")
     ax.set_ylabel("tuning order ω/Ω")
     ax.set_title(f"Bifilar tuned to {n_lin.order_linear:.3g}P at Ω = {base['hub_speed']:g} rad/s")
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    for ext in ("png", "pdf"):
-        p = out_dir / f"pendulum_order.{ext}"
-        fig.savefig(p, dpi=150)
-        paths.append(p)
-    plt.close(fig)
-    return paths
+    return paths + _finish(fig, ax, out_dir / "pendulum_order")
 
 
 @click.command()

@@ -15,23 +15,30 @@ from numpy.typing import NDArray
 Array = NDArray[np.float64]
 
 
-class HolonomicGroup:
-    """m rows C_r(q) = 0, each depending on the k coordinates ``cols[r]`` (m × k, no repeats)."""
+class _Group:
+    """Rows over a fixed set of columns per row (``cols``, m × k, no repeats)."""
 
     name: str = ""
     cols: NDArray[np.int64]
-    hess_rows: NDArray[np.int64] = np.zeros(0, dtype=np.int64)
-    hess_cols: NDArray[np.int64] = np.zeros(0, dtype=np.int64)
 
     def scalars(self) -> list:
+        """Extra scalar unknowns the group owns (η, s)."""
         return []
 
     def setup(self, system) -> None:
+        """Resolve coordinate indices once the system is numbered."""
         raise NotImplementedError
 
     @property
     def m(self) -> int:
         return self.cols.shape[0]
+
+
+class HolonomicGroup(_Group):
+    """m rows C_r(q) = 0, each depending on the k coordinates ``cols[r]``."""
+
+    hess_rows: NDArray[np.int64] = np.zeros(0, dtype=np.int64)
+    hess_cols: NDArray[np.int64] = np.zeros(0, dtype=np.int64)
 
     def evaluate(self, q: Array) -> tuple[Array, Array]:
         """(C (m,), ∂C/∂q values (m, k) at ``cols``)."""
@@ -42,21 +49,8 @@ class HolonomicGroup:
         return np.zeros(0)
 
 
-class NonholonomicGroup:
+class NonholonomicGroup(_Group):
     """m rows A_r(q)·q̇ = 0, each over the k coordinates ``cols[r]``."""
-
-    name: str = ""
-    cols: NDArray[np.int64]
-
-    def scalars(self) -> list:
-        return []
-
-    def setup(self, system) -> None:
-        raise NotImplementedError
-
-    @property
-    def m(self) -> int:
-        return self.cols.shape[0]
 
     def matrix(self, q: Array) -> Array:
         """Values (m, k) of A(q) at ``cols``."""
