@@ -177,7 +177,9 @@ def design(shape: str, geometry: Geometry, tuning_order: float | None = None,
         b = 0.5 * r_v * (1.0 - np.sqrt(n2 / (1.0 + n2)))
         a = r_v - 2.0 * b
         k = (a + b) / b
-        phi_v = np.pi * b / (a + b)  # parameter of the vertex (farthest point)
+        # |Γ|² = (a+b)² + b² − 2b(a+b) cos((k−1)φ): the vertex (farthest point) is at
+        # (k − 1)φ = π, i.e. φ_v = π b/a, where |Γ| = a + 2b
+        phi_v = np.pi * b / a
 
         def path(s):
             ph = phi_v + s

@@ -15,8 +15,9 @@ The measured orders include the EP phase error, (ωh)²/12 = 2.06e-5 at the defa
 per linear period: that is most of every difference below and sets the margin of the 1e-4
 limits (5×).
 
-Runtime (2 cores, idle): default selection about 1 minute (5 short simulations of 2 periods);
-amplitude sweeps are marked ``slow``.
+Runtime (2 cores, shared, load ~3): default selection about 65 s (5 simulations of 2 periods
+× 400 steps, each shared by several tests, and 2 short ones); the amplitude sweeps are marked
+``slow`` (about 3 minutes).
 """
 
 from __future__ import annotations
@@ -192,7 +193,9 @@ def test_circle_large_amplitude():
     """Circular holes at 30°: exactly a pendulum, ω(A)/ω(0) = π/(2K(sin 15°)) = 0.98289.
     Measured ratio 0.98286275 (−2.7e-5 from π/(2K)); Jacobi integral ptp 4.0e-9 relative, an
     O((Ωh)² A²) bounded oscillation of the monitored T + V − Ω̃ L_z, not a drift (1.6e-8 at
-    200 steps, 3.3e-10 at 10°), so the limit is 1e-8 here and 1e-10 at 1°."""
+    200 steps, 3.3e-10 at 10°), due to the pins' polar inertia (4.2e-9 with I_p alone, 1e-14
+    with m_p alone): the limit is 1e-8 here and 1e-10 at 1°. The exact EP balance is
+    E − W, checked below to roundoff."""
     ds = cached_run(hole="circle", hole_diameter=D_HOLE, amplitude=30.0, periods=2.0)
     ratio = float(ds.frequency_order) / eq7_order(D_HOLE)
     assert abs(ratio / k_ratio(30.0) - 1.0) <= 1e-4, ratio
@@ -219,10 +222,13 @@ def test_cycloid_slightly_hardening():
 @pytest.mark.slow
 @pytest.mark.parametrize("amplitude", [10.0, 20.0, 40.0, 60.0])
 def test_circle_amplitude_sweep(amplitude):
+    """4 periods × 400 steps. Measured ω/ω_Eq7 against π/(2K): −2.54e-5 (10°), −2.60e-5
+    (20°), −2.79e-5 (40°), −3.06e-5 (60°); Jacobi integral ptp 3.2e-10, 1.5e-9, 8.0e-9,
+    2.6e-8 (∝ A², from the pins' polar inertia: 1e-14 with I_p = 0, see the report)."""
     ds = cached_run(hole="circle", hole_diameter=D_HOLE, amplitude=amplitude)
     ratio = float(ds.frequency_order) / eq7_order(D_HOLE)
     assert abs(ratio / k_ratio(amplitude) - 1.0) <= 1e-4, ratio
-    check_integrity(ds, jacobi_tol=3e-8)
+    check_integrity(ds, jacobi_tol=1e-7)
 
 
 @pytest.mark.slow
@@ -230,10 +236,13 @@ def test_circle_amplitude_sweep(amplitude):
 def test_cycloid_pinless_against_quadrature(amplitude):
     """Pin-less cycloid holes: the order against the quadrature of the tuning mass's path
     (independent of the hole construction): expected rise 2.12e-4 (10°), 8.46e-4 (20°),
-    3.37e-3 (40°). Measured …"""
+    3.37e-3 (40°), i.e. (1/n²) × the circle's drop to 2.7e-3. Measured got/expected − 1:
+    −2.55e-5, −2.64e-5, −3.03e-5 (the EP phase error); Jacobi ptp ≤ 1.7e-12 (no pin
+    inertia)."""
     n = 3.0
     ds = cached_run(hole="cycloid", tuning_order=n, amplitude=amplitude, pin_mass=0.0,
                     pin_inertia=0.0)
+    check_integrity(ds, jacobi_tol=1e-10)
     rho = (R0 + RM) / n**2  # Eq. (7) without pins
     speed, gap, n_lin = cycloid_path(R0 + RM + rho, rho / 4)
     assert n_lin == pytest.approx(n, rel=1e-12)
@@ -252,8 +261,9 @@ EPI_BUG = ("studies/holes.py design(): the epicycloid vertex parameter is phi_v 
 def test_epicycloid_pinless_order_independent_of_amplitude():
     """Errata 6 (Denman 1992): with pins of negligible mass the epicycloid is the tautochrone
     of the centrifugal field: order constant from 5° to 40° within 1e-4. Measured with the
-    bug: 0.99737 at 1°, 1.00153 at 5°; with the one-line fix 0.999975 (1°), 0.999975 (5°),
-    0.999974 (20°), 0.999970 (40°): flat to 5e-6."""
+    bug: ω/(3Ω) = 0.99737 (1°), 1.00153 (5°), 1.00020 (20°), 1.00008 (40°) — the release is
+    measured from a point 2.5° of tangent turn off the true vertex; with the one-line fix
+    0.999975 (1°), 0.999975 (5°), 0.999974 (20°), 0.999970 (40°): flat to 5e-6."""
     n = 3.0
     ratios = []
     for amp in (5.0, 20.0, 40.0):

@@ -10,8 +10,8 @@ integral, ω² = (g/R)/(1 + ρ²/R²)), Eq. (26), and for case 2 on the cycloid 
 integration of the Lagrange equation in the tangent angle (scipy's DOP853). The studies'
 own formulas (Eq. 27 corrected, the energy-integral derivation) are checked against these.
 
-Runtime (2 cores, idle): default selection about 1 minute; the full 32-case grid and the
-``--figures`` command are marked ``slow`` (about 3 and 2 minutes).
+Runtime (2 cores, shared, load ~3): default selection about 90 s; the full 32-case grid and
+the ``--figures`` command (32 runs on 2 workers) are marked ``slow`` (about 4 and 3.5 minutes).
 """
 
 from __future__ import annotations

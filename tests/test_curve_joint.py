@@ -6,7 +6,7 @@ the Lagrangian of a disc rolling inside a circular track), never from the code u
 Each tolerance is commented with the value measured when the test was written and the reason
 for it.
 
-Runtime (2 cores): about 15 s, dominated by the rolling disc (400 steps).
+Runtime (2 cores): about 8 s, dominated by the rolling disc (400 steps).
 """
 
 from __future__ import annotations
