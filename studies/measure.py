@@ -35,13 +35,21 @@ def zero_crossings(t: ArrayLike, x: ArrayLike) -> np.ndarray:
 
 def period_from_crossings(t: ArrayLike, x: ArrayLike, center: float | None = None) -> float:
     """Period (s) of an oscillation x(t) about ``center`` (default: mid-range), from the
-    least-squares slope of its successive zero crossings (half a period apart) over the
-    whole record. NaN if fewer than three crossings."""
+    least-squares slopes of its upward and of its downward crossings over the whole record.
+
+    Same-direction crossings are exactly one period apart whatever the level, so an
+    oscillation that is not symmetric about ``center`` gives no bias. NaN if either direction
+    has fewer than two crossings.
+    """
+    t = np.asarray(t, dtype=float)
     x = np.asarray(x, dtype=float)
     c = 0.5 * (x.max() + x.min()) if center is None else center
     tc = zero_crossings(t, x - c)
-    if len(tc) < 3:
+    slopes = []
+    for first in (0, 1):
+        tk = tc[first::2]
+        if len(tk) >= 2:
+            slopes.append(np.polyfit(np.arange(len(tk)), tk, 1)[0])
+    if len(slopes) < 2:
         return float("nan")
-    k = np.arange(len(tc))
-    slope = np.polyfit(k, tc, 1)[0]
-    return float(2.0 * slope)
+    return float(np.mean(slopes))
