@@ -32,7 +32,7 @@ class NewtonResult:
     iterations: int
     factorizations: int
     message: str = ""
-    stale_refactored: bool = False  # factors reused from an earlier call had to be replaced
+    stale_refactored: bool = False  # factors reused from an earlier call failed at once
 
 
 class LinearSolver:
@@ -66,6 +66,7 @@ def newton(residual: Callable[[NDArray], NDArray], jacobian: Callable[[NDArray],
     nfact = 0
     fresh = False
     started_stale = reuse and solver.lu is not None
+    stale_bad = False
     if not reuse or solver.lu is None:
         msg = solver.factor(jacobian(x))
         nfact += 1
@@ -94,8 +95,9 @@ def newton(residual: Callable[[NDArray], NDArray], jacobian: Callable[[NDArray],
             continue
         # converged, or stagnating at the roundoff floor (tiny updates that no longer shrink)
         if converged(x, dx) or (rate > 0.5 and converged(x, dx * ROUNDOFF_FLOOR)):
-            return NewtonResult(x, True, it, nfact, stale_refactored=started_stale and nfact > 0)
+            return NewtonResult(x, True, it, nfact, stale_refactored=stale_bad)
         if rate > SLOW_RATE or (not fresh and (it >= 4 or rate > STALE_RATE)):
+            stale_bad = stale_bad or (started_stale and not fresh and it <= 2)
             if fresh and rate >= 1.0 and it > 3:
                 return NewtonResult(x, False, it, nfact,
                                     f"Newton diverged (contraction rate {rate:.2f} ≥ 1)")
