@@ -113,7 +113,7 @@ def collar_figures(out_dir: Path, steps_per_period: int = 1000, workers: int = 2
 
 
 @click.command()
-@click.option("--curve", type=click.Choice(["circle", "cycloid"]), help="curve shape")
+@click.option("--curve", type=str, help="curve shape: circle or cycloid")
 @click.option("--theta0", type=float, help="release tangent angle (degree)")
 @click.option("--mass", type=float, default=2.0, show_default=True, help="collar mass (kg)")
 @click.option("--radius", type=float, default=1.0, show_default=True, help="circle radius (m)")
@@ -122,8 +122,7 @@ def collar_figures(out_dir: Path, steps_per_period: int = 1000, workers: int = 2
 @click.option("--inertia", type=float, default=0.0, show_default=True,
               help="collar polar inertia Ip (kg m2); > 0 is case 2")
 @click.option("--gravity", type=float, default=9.81, show_default=True, help="g (m/s2)")
-@click.option("--scheme", type=click.Choice(["ep", "ed", "galpha"]), default="ep",
-              show_default=True)
+@click.option("--scheme", type=str, default="ep", show_default=True, help="ep, ed or galpha")
 @click.option("--steps-per-period", "steps_per_period", type=int, default=1000,
               show_default=True)
 @click.option("--periods", type=float, default=2.0, show_default=True)
@@ -209,8 +208,8 @@ def pendulum_figures(out_dir: Path, base: dict[str, Any], workers: int = 2) -> l
 
 
 @click.command()
-@click.option("--hole", type=click.Choice(["circle", "cycloid", "epicycloid"]), default="circle",
-              show_default=True)
+@click.option("--hole", type=str, default="circle", show_default=True,
+              help="circle, cycloid or epicycloid")
 @click.option("--hole-diameter", "hole_diameter", type=float, default=None,
               help="circular hole diameter D (m); exclusive with --tuning-order")
 @click.option("--tuning-order", "tuning_order", type=float, default=None,
@@ -233,8 +232,7 @@ def pendulum_figures(out_dir: Path, base: dict[str, Any], workers: int = 2) -> l
 @click.option("--periods", type=float, default=4.0, show_default=True)
 @click.option("--steps-per-period", "steps_per_period", type=int, default=400,
               show_default=True)
-@click.option("--scheme", type=click.Choice(["ep", "ed", "galpha"]), default="ep",
-              show_default=True)
+@click.option("--scheme", type=str, default="ep", show_default=True, help="ep, ed or galpha")
 @click.option("--out", type=click.Path(dir_okay=False, path_type=Path))
 @click.option("--figures", type=click.Path(file_okay=False, path_type=Path),
               help="draw frequency order against amplitude for the three hole shapes")

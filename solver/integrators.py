@@ -422,7 +422,7 @@ def _kkt_identity(s: System, diag: Array, g: Array):
 
 
 def project_velocities(s: System, q: Array, v: Array, t: float) -> Array:
-    """Closest v (least squares) with G v + ∂C/∂t = 0 and A(q) v = 0."""
+    """Closest v (weighted least squares) with G v + ∂C/∂t = 0 and A(q) v = 0."""
     import scipy.sparse as sp
 
     if s.mh + s.mn == 0:
@@ -436,12 +436,16 @@ def project_velocities(s: System, q: Array, v: Array, t: float) -> Array:
         rows.append(sp.csr_matrix((a, (s.A_rows - s.mh, s.A_cols)), shape=(s.mn, s.n)))
         rhs.append(np.zeros(s.mn))
     big = sp.vstack(rows).tocsr()
-    mat = sp.bmat([[sp.identity(s.n), big.T], [big, None]], format="csc")
+    # body coordinates keep their given rates as far as the constraints allow; the massless
+    # joint scalars (η, s) take whatever rates the constraints imply (tiny weight)
+    w = np.ones(s.n)
+    w[list(s.scalar_index.values())] = 1e-8
+    mat = sp.bmat([[sp.diags(w), big.T], [big, None]], format="csc")
     lin = LinearSolver()
     msg = lin.factor(mat)
     if msg:
         raise ValueError(f"cannot project the initial velocities: {msg}")
-    sol = lin.lu.solve(np.concatenate([v, np.concatenate(rhs)]))
+    sol = lin.lu.solve(np.concatenate([w * v, np.concatenate(rhs)]))
     return sol[: s.n]
 
 

@@ -38,7 +38,8 @@ def collar_cycloid_period(a: float, gravity: float, theta0: float, mass: float,
     def f(u: float) -> float:  # Eq. (27) integrand times √(u − u²) (the algebraic weight)
         return np.sqrt(0.5 + rho2 / (16.0 * a * a) / (2.0 - (y0 / a) * u))
 
-    val, _ = quad(f, 0.0, 1.0, weight="alg", wvar=(-0.5, -0.5), epsabs=1e-14, epsrel=1e-13)
+    val, _ = quad(f, 0.0, 1.0, weight="alg", wvar=(-0.5, -0.5), epsabs=1e-14, epsrel=1e-13,
+                  limit=200)
     return 4.0 * np.sqrt(2.0 * a / gravity) * val
 
 
