@@ -147,7 +147,7 @@ def spinning(name: str, omega: float | TimeFunction, axis: ArrayLike = (0.0, 0.0
 
     ``omega`` is a constant speed (rad/s) or a :class:`TimeFunction` giving the angle ψ(t) (rad).
     """
-    from solver.rotations import rotation_about, skew
+    from solver.rotations import rotation_about
 
     n = np.asarray(axis, dtype=float)
     n = n / np.linalg.norm(n)
@@ -160,7 +160,6 @@ def spinning(name: str, omega: float | TimeFunction, axis: ArrayLike = (0.0, 0.0
         r = rotation_about(n, psi)
         return c, r, np.zeros(3), rate * n, np.zeros(3), acc * n
 
-    _ = skew  # (kept for readers: ω̃ R = Ṙ)
     return PrescribedBody(name, motion, mass=mass, inertia=inertia)
 
 

@@ -393,7 +393,7 @@ def project_positions(s: System, q: Array, t: float) -> Array:
         c, g = s.constraint_and_jacobian(q, t)
         if c.size == 0 or np.abs(c).max() < 1e-14 * max(1.0, np.abs(q).max()):
             return q
-        n, m = s.n, s.mh
+        n = s.n
         ident = np.ones(n)
         mat = _kkt_identity(s, ident, g)
         rhs = np.concatenate([q_ref - q, -c, np.zeros(s.mn)])
@@ -402,7 +402,6 @@ def project_positions(s: System, q: Array, t: float) -> Array:
             raise ValueError(f"cannot assemble the initial configuration: {msg}")
         dx = lin.lu.solve(rhs)
         q += dx[:n]
-        _ = m
     c = s.constraint(q, t)
     raise ValueError(f"initial configuration cannot satisfy the constraints (max |C| = "
                      f"{np.abs(c).max():.3g}): check joint locations and axes")
@@ -453,12 +452,10 @@ def initial_accelerations(s: System, q: Array, v: Array, t: float, multipliers: 
     """q̈ from [[M, Gᵀ, Aᵀ], [G, 0, 0], [A, 0, 0]] [q̈; λ; ν] = [f − ∇V; −γ; −γ_A]."""
     g = s.jacobian_values(q, t)
     a = s.nonholonomic_values(q) if s.mn else np.zeros(0)
-    empty = np.zeros(0)
-    z = np.zeros
-    mat = s.kkt(1.0, z(len(s.stiffness_values(q))), z(sum(len(x) for x in
-                s.applied_jacobians(q, v, t)) // 2), z(len(s.quad.hess_rows)),
-                z(sum(len(gr.hess_rows) for gr in s.groups)), g, g, a, a)
-    _ = empty
+    z = np.zeros  # no stiffness, damping or curvature blocks: the matrix is [[M, Gᵀ], [G, 0]]
+    mat = s.kkt(1.0, z(len(s.stiffness_values(q))), z(len(s.applied_jacobians(q, v, t)[0])),
+                z(len(s.quad.hess_rows)), z(sum(len(gr.hess_rows) for gr in s.groups)),
+                g, g, a, a)
     rhs = np.concatenate([s.applied(q, v, t) - s.gradient(q), -s.constraint_curvature(q, v, t),
                           -s.nonholonomic_curvature(q, v) if s.mn else np.zeros(0)])
     lin = LinearSolver()

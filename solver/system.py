@@ -198,7 +198,7 @@ class System:
 
     # ------------------------------------------------------------------ sparse pattern
     def _build_pattern(self) -> None:
-        n, mq, mh = self.n, self.mq, self.mh
+        n = self.n
         Mc = self.M.tocoo()
         blocks = [(Mc.row, Mc.col)]
         kr = [f.hess_rows for f in self.potential_elements]
@@ -237,7 +237,6 @@ class System:
         self._indptr = np.searchsorted(ucols, np.arange(N + 1)).astype(np.int32)
         self.N = N
         self.M_vals = Mc.data
-        _ = mq, mh
 
     def kkt(self, cM: float, K: Array, D: Array, H: Array, HG: Array,
             GT: Array, G: Array, AT: Array, A: Array) -> sp.csc_matrix:

@@ -174,7 +174,7 @@ def run(params: dict[str, Any]) -> xr.Dataset:
     # harmonics need positions to ~1e-9 m, not the roundoff-level solve that exact energy
     # bookkeeping needs: a looser Newton tolerance saves about two iterations per step
     integ = make_integrator(sysm, "ep", h, tol=NEWTON_TOL)
-    os_, oh = sysm.offset[shaft], sysm.offset[hub]
+    os_ = sysm.offset[shaft]
     mass_off = [sysm.offset[b.mass] for b in parts]
 
     def sample() -> np.ndarray:
@@ -184,7 +184,6 @@ def run(params: dict[str, Any]) -> xr.Dataset:
         cm = np.mean([q[o : o + 3] for o in mass_off], axis=0)
         phis = [0.0 if b.locked else pin_angle(sysm, b, hub, q) for b in parts]
         f = k * x + c * xd  # force the springs and dampers pass to the fuselage
-        _ = oh
         return np.array([integ.t, x[0], x[1], f[0], f[1], cm[0], cm[1], *np.degrees(phis)])
 
     t0 = time.perf_counter()
