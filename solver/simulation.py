@@ -32,7 +32,8 @@ def simulate(model, t_end: float, h: float, scheme: str = "ep", rho_inf: float |
              record_every: int = 1, reactions: bool = True,
              callback: Callable[[Integrator], None] | None = None,
              reuse_jacobian: bool = True, system: System | None = None,
-             record_initial: bool = False, tol: float | None = None) -> Simulation:
+             record_initial: bool = False, tol: float | None = None,
+             out: str | None = None) -> Simulation:
     """Integrate ``model`` from t = 0 to ``t_end`` (s) with step ``h`` (s).
 
     Parameters
@@ -44,6 +45,8 @@ def simulate(model, t_end: float, h: float, scheme: str = "ep", rho_inf: float |
     record_every
         Store the configuration every this many steps (energy, work, violation and Newton
         iterations are stored every step).
+    out
+        If given, the results are also written to this netCDF file.
     tol
         Newton tolerance on q relative to its scale (default
         :data:`solver.integrators.CONSTRAINT_TOL`, 1e-14).
@@ -103,6 +106,8 @@ def simulate(model, t_end: float, h: float, scheme: str = "ep", rho_inf: float |
         "units": "1", "long_name": "Newton iterations of the step"})
     ds.attrs.update(scheme=scheme, time_step=h, converged=int(ok), message=msg,
                     solver_seconds=seconds)
+    if out is not None:
+        ds.to_netcdf(out)
     return Simulation(ds, ok, msg, integ, seconds)
 
 
