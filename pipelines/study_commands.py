@@ -45,6 +45,18 @@ def _finish(fig, ax, stem: Path) -> list[Path]:
     return paths
 
 
+def _run_and_write(spec, given: dict[str, Any], out: Path) -> xr.Dataset:
+    """Validate, run, write; one-line errors for bad input or a failed simulation."""
+    try:
+        ds = spec.run(spec.complete(given))
+    except ParameterError as exc:
+        _fail(str(exc))
+    _write(ds, out)
+    if not ds.attrs["converged"]:
+        _fail(f"simulation failed: {ds.attrs['message']}")
+    return ds
+
+
 def _pool_map(fn, items: list, workers: int) -> list:
     if workers <= 1:
         return [fn(i) for i in items]
@@ -143,17 +155,10 @@ def collar(curve, theta0, mass, radius, cycloid_a, inertia, gravity, scheme, ste
         _fail(f"missing {', '.join(missing)} (or give --figures DIR)")
     from studies.collar import SPEC
 
-    try:
-        params = SPEC.complete(dict(curve=curve, theta0=theta0, mass=mass, radius=radius,
-                                    cycloid_a=cycloid_a, inertia=inertia, gravity=gravity,
-                                    scheme=scheme, steps_per_period=steps_per_period,
-                                    periods=periods))
-        ds = SPEC.run(params)
-    except ParameterError as exc:
-        _fail(str(exc))
-    _write(ds, out)
-    if not ds.attrs["converged"]:
-        _fail(f"simulation failed: {ds.attrs['message']}")
+    ds = _run_and_write(SPEC, dict(curve=curve, theta0=theta0, mass=mass, radius=radius,
+                                   cycloid_a=cycloid_a, inertia=inertia, gravity=gravity,
+                                   scheme=scheme, steps_per_period=steps_per_period,
+                                   periods=periods), out)
     click.echo(f"measured period  {float(ds.period):.9f} s")
     click.echo(f"analytic period  {float(ds.period_analytic):.9f} s")
     click.echo(f"relative error   {float(ds.period_error):.3e}")
@@ -260,16 +265,12 @@ def pendulum(hole, hole_diameter, tuning_order, hub_speed, arm_radius, cm_offset
             for p in pendulum_figures(figures, base):
                 click.echo(str(p))
             return
-        missing = [n for n, v in (("--amplitude", amplitude), ("--out", out)) if v is None]
-        if missing:
-            _fail(f"missing {', '.join(missing)} (or give --figures DIR)")
-        params = SPEC.complete({**given, "amplitude": amplitude})
-        ds = SPEC.run(params)
     except ParameterError as exc:
         _fail(str(exc))
-    _write(ds, out)
-    if not ds.attrs["converged"]:
-        _fail(f"simulation failed: {ds.attrs['message']}")
+    missing = [n for n, v in (("--amplitude", amplitude), ("--out", out)) if v is None]
+    if missing:
+        _fail(f"missing {', '.join(missing)} (or give --figures DIR)")
+    ds = _run_and_write(SPEC, {**given, "amplitude": amplitude}, out)
     click.echo(f"tuning order measured   {float(ds.frequency_order):.6f}")
     click.echo(f"tuning order linear     {float(ds.frequency_order_linear):.6f}")
     jac = ds.jacobi.values
