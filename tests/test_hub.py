@@ -51,7 +51,7 @@ def test_tuned_bifilars_remove_3p_hub_motion(table1):
     locked = float(amp.isel(case=_case(ds, "0")).max())
     tuned = float(amp.isel(case=_case(ds, "1")).max())
     detuned = float(amp.isel(case=_case(ds, "2")).max())
-    # measured: tuned/locked = 0.089 (91 % reduction), detuned/locked = 0.59
+    # measured: tuned/locked = 0.085 (91.5 % reduction), detuned/locked = 0.46
     assert tuned <= 0.1 * locked
     assert detuned >= 3 * tuned
 
