@@ -49,7 +49,7 @@ def simulate(model, t_end: float, h: float, scheme: str = "ep", rho_inf: float |
         If given, the results are also written to this netCDF file.
     tol
         Newton tolerance on q relative to its scale (default
-        :data:`solver.integrators.CONSTRAINT_TOL`, 1e-14).
+        :data:`solver.integrators.CONSTRAINT_TOL`, 3e-15).
     callback
         Called with the integrator after every converged step (e.g. to record study outputs),
         and once before the first step if ``record_initial``.
