@@ -347,7 +347,9 @@ def batch_curve_joints(items: list) -> list:
 
 
 class ArcLength(NonholonomicGroup):
-    """ṡ − |p*'(η)| η̇ = 0 (Eq. 25): the arc length s travelled along a sliding joint's curve."""
+    """ṡ − |p*'(η)| η̇ = 0 (Eq. 25): the arc length s travelled along a sliding joint's curve.
+
+    A declaration: the system evaluates all of them on one curve together (ArcLengthSet)."""
 
     def __init__(self, joint: CurveSliding, name: str | None = None, s0: float = 0.0) -> None:
         self.joint = joint
@@ -362,17 +364,11 @@ class ArcLength(NonholonomicGroup):
         self.i_e = sys.scalar_index[self.joint.eta]
         self.cols = np.array([[self.i_s, self.i_e]], dtype=np.int64)
 
-    def matrix(self, q: Array) -> Array:
-        return np.array([[1.0, -float(self.joint.curve.speed(q[self.i_e]))]])
-
-    def derivative(self, q: Array, dq: Array) -> Array:
-        d = self.joint.curve.derivatives(q[self.i_e], 2)
-        sp = float(np.linalg.norm(d[1]))
-        return np.array([[0.0, -float(d[1] @ d[2]) / sp * dq[self.i_e]]])
-
 
 class Rolling(NonholonomicGroup):
     """Rolling without slip of a pin on a curve: ṡ + σ r (ω_pin − ω_link)·n = 0 (Eq. 5).
+
+    A declaration: the system evaluates all of them together (RollingSet).
 
     Parameters
     ----------
@@ -408,31 +404,6 @@ class Rolling(NonholonomicGroup):
         cols = [sys.scalar_index[self.arc.s]]
         cols += list(range(self.op + 3, self.op + 12)) + list(range(self.ol + 3, self.ol + 12))
         self.cols = np.array([cols], dtype=np.int64)
-
-    def matrix(self, q: Array) -> Array:
-        dp = q[self.op + 3 : self.op + 12].reshape(3, 3)
-        dl = q[self.ol + 3 : self.ol + 12].reshape(3, 3)
-        n = self.axis @ dl
-        k = 0.5 * self.side * self.r
-        row = np.empty(19)
-        row[0] = 1.0
-        row[1:10] = (k * _cross(n, dp)).ravel()
-        row[10:19] = (-k * _cross(n, dl)).ravel()
-        return row[None, :]
-
-    def derivative(self, q: Array, dq: Array) -> Array:
-        # A·δ = δs + k Σ_α n·(d_α^P × δd_α^P) − k Σ_α n·(d_α^L × δd_α^L), n = Σ_β a_β d_β^L
-        dp = q[self.op + 3 : self.op + 12].reshape(3, 3)
-        dl = q[self.ol + 3 : self.ol + 12].reshape(3, 3)
-        ep = dq[self.op + 3 : self.op + 12].reshape(3, 3)
-        el = dq[self.ol + 3 : self.ol + 12].reshape(3, 3)
-        n = self.axis @ dl
-        k = 0.5 * self.side * self.r
-        w = (_cross(dp, ep) - _cross(dl, el)).sum(axis=0)  # ∂/∂n
-        row = np.zeros(19)
-        row[1:10] = (k * _cross(ep, n)).ravel()
-        row[10:19] = (-k * _cross(el, n)).ravel() + k * np.outer(self.axis, w).ravel()
-        return row[None, :]
 
 
 class ArcLengthSet(NonholonomicGroup):

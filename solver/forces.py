@@ -59,7 +59,7 @@ class ForceElement:
         return EMPTY_F, EMPTY_F
 
 
-def _matrix(b: VecExpr, n_hint: int = 0) -> tuple[NDArray[np.int64], NDArray[np.int64], Array]:
+def _matrix(b: VecExpr) -> tuple[NDArray[np.int64], NDArray[np.int64], Array]:
     """Sparse rows/cols/vals of the 3×n map q ↦ (vector expression − const)."""
     rows, cols, vals = [], [], []
     for c, o in b.terms:
