@@ -9,11 +9,15 @@ unknowns, which is what makes the midpoint rule exactly energy preserving.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from solver.element import Element
+from solver.quadratic import QuadraticBuilder, QuadraticSet, VecExpr
+from solver.state import ALGEBRAIC, SECOND, StateBlock
 from solver.timefunctions import TimeFunction
 
 
@@ -33,8 +37,26 @@ def _rot(r: ArrayLike | None, owner: str) -> NDArray[np.float64]:
     return a
 
 
+def _director_mass(mass: float, e: NDArray[np.float64] | None) -> NDArray[np.float64]:
+    """Mass matrix of (x, d1, d2, d3): m I for x, E_αβ I for the directors."""
+    if e is None:
+        return mass * np.eye(3)
+    out = np.zeros((12, 12))
+    out[:3, :3] = mass * np.eye(3)
+    out[3:, 3:] = np.kron(e, np.eye(3))
+    return out
+
+
+def _director_state(body, x, r, v, w, e) -> StateBlock:
+    """The 12 coordinates (x, d1, d2, d3) of a body with rotation r (d_α = column α)."""
+    return StateBlock(body, SECOND, 12, initial=np.concatenate([x, np.asarray(r).T.ravel()]),
+                      rate=np.concatenate([v, np.cross(w, np.asarray(r).T).ravel()]),
+                      mass=_director_mass(body.mass, e), units="m",
+                      long_name=f"position and directors of {body.name}")
+
+
 @dataclass(eq=False)
-class RigidBody:
+class RigidBody(Element):
     """A rigid body.
 
     Parameters
@@ -85,15 +107,33 @@ class RigidBody:
         self.velocity = _vec(self.velocity, "velocity", owner)
         self.angular_velocity = _vec(self.angular_velocity, "angular_velocity", owner)
 
+    set_class = QuadraticSet
+    quadratic_priority = 0  # orthonormality rows come before the joints' rows
+
     @property
     def director_inertia(self) -> NDArray[np.float64]:
         """E = ½ tr(J) I − J: kinetic energy ½ Σ E_αβ ḋα·ḋβ of the rotation (kg·m²)."""
         j = self.inertia_tensor
         return 0.5 * np.trace(j) * np.eye(3) - j
 
+    def states(self) -> list[StateBlock]:
+        return [_director_state(self, self.position, self.orientation, self.velocity,
+                                self.angular_velocity, self.director_inertia)]
+
+    def quadratic_rows(self, qb: QuadraticBuilder, lay) -> tuple[NDArray[np.int64], dict]:
+        """Six orthonormality rows d_α·d_β − δ_αβ = 0."""
+        o = lay.offset[self]
+        rows = qb.new_rows(6)
+        d = [VecExpr([(1.0, o + 3 + 3 * a)]) for a in range(3)]
+        for r, (a, c) in zip(rows, [(0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (2, 0)], strict=True):
+            qb.add_dot(int(r), d[a], d[c])
+            if a == c:
+                qb.add_constant(int(r), -1.0)
+        return rows, {}
+
 
 @dataclass(eq=False)
-class PointMass:
+class PointMass(Element):
     """A particle (kg, m, m/s): three coordinates, no orientation."""
 
     name: str
@@ -108,9 +148,14 @@ class PointMass:
         self.position = _vec(self.position, "position", owner)
         self.velocity = _vec(self.velocity, "velocity", owner)
 
+    def states(self) -> list[StateBlock]:
+        return [StateBlock(self, SECOND, 3, initial=self.position, rate=self.velocity,
+                           mass=_director_mass(self.mass, None), units="m",
+                           long_name=f"position of {self.name}")]
+
 
 @dataclass(eq=False)
-class PrescribedBody:
+class PrescribedBody(Element):
     """A body whose motion is a given function of time (a driver), e.g. a hub spinning at Ω.
 
     ``motion(t)`` returns (x, R, v, ω, a, α): position (m), rotation matrix, velocity (m/s),
@@ -123,6 +168,9 @@ class PrescribedBody:
     mass: float = 0.0
     inertia: ArrayLike = (0.0, 0.0, 0.0)
 
+    set_class = QuadraticSet
+    quadratic_priority = 0
+
     def __post_init__(self) -> None:
         j = np.asarray(self.inertia, dtype=float)
         self.inertia_tensor = np.diag(j) if j.shape == (3,) else j
@@ -131,6 +179,56 @@ class PrescribedBody:
     def director_inertia(self) -> NDArray[np.float64]:
         j = self.inertia_tensor
         return 0.5 * np.trace(j) * np.eye(3) - j
+
+    def pose(self, t: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Position (m) and rotation matrix at time t."""
+        x, r, *_ = self.motion(t)
+        return np.asarray(x, float), np.asarray(r, float)
+
+    def moves(self) -> bool:
+        """Whether the prescribed motion depends on time (a driver that can do work)."""
+        x0, r0, v0, w0, *_ = self.motion(0.0)
+        x1, r1, *_ = self.motion(1.2345)
+        return bool(np.any(v0) or np.any(w0) or np.abs(np.subtract(x1, x0)).max() > 0
+                    or np.abs(np.subtract(r1, r0)).max() > 0)
+
+    def states(self) -> list[StateBlock]:
+        x, r, v, w, *_ = (np.asarray(z, dtype=float) for z in self.motion(0.0))
+        return [_director_state(self, x, r, v, w, self.director_inertia)]
+
+    def quadratic_rows(self, qb: QuadraticBuilder, lay) -> tuple[NDArray[np.int64], dict]:
+        """Twelve rows q_k − c_k(t) = 0 (constants for a body at rest)."""
+        o = lay.offset[self]
+        rows = qb.new_rows(12)
+        moving = self.moves()
+        comps = _prescribed_components(self) if moving else None
+        q0 = lay.q0_raw
+        for k in range(12):
+            qb.add_linear(int(rows[k]), o + k, 1.0)
+            if moving:
+                qb.add_constant(int(rows[k]), -1.0, comps[k])
+            elif q0[o + k] != 0.0:
+                qb.add_constant(int(rows[k]), -float(q0[o + k]))
+        return rows, {}
+
+
+def _prescribed_components(body: PrescribedBody) -> list[TimeFunction]:
+    """Coordinates (x, d1, d2, d3) of a prescribed body as time functions with derivatives."""
+
+    @lru_cache(maxsize=4)
+    def state(t: float):
+        x, r, v, w, a, al = (np.asarray(z, dtype=float) for z in body.motion(t))
+        d = r.T  # rows are directors
+        dd = np.cross(w, d)
+        ddd = np.cross(al, d) + np.cross(w, dd)
+        return (np.concatenate([x, d.ravel()]), np.concatenate([v, dd.ravel()]),
+                np.concatenate([a, ddd.ravel()]))
+
+    def comp(k: int) -> TimeFunction:
+        return TimeFunction(lambda t: state(t)[0][k], lambda t: state(t)[1][k],
+                            lambda t: state(t)[2][k])
+
+    return [comp(k) for k in range(12)]
 
 
 def ground(name: str = "ground") -> PrescribedBody:
@@ -167,12 +265,17 @@ Body = RigidBody | PointMass | PrescribedBody
 
 
 @dataclass(eq=False)
-class Scalar:
-    """An extra scalar unknown owned by a joint (curve parameter η, arc length s); massless."""
+class Scalar(Element):
+    """An extra scalar unknown owned by a joint (curve parameter η, arc length s); massless.
+
+    The joint or relation that owns it lists it in its own :meth:`states`."""
 
     name: str
     initial: float = 0.0
     rate: float = 0.0
     units: str = "1"
     long_name: str = ""
-    meta: dict = field(default_factory=dict)
+
+    def states(self) -> list[StateBlock]:
+        return [StateBlock(self, ALGEBRAIC, 1, initial=self.initial, rate=self.rate,
+                           units=self.units, long_name=self.long_name)]

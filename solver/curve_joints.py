@@ -25,13 +25,14 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from solver.bodies import Body, PointMass, Scalar
-from solver.constraints import HolonomicGroup, NonholonomicGroup
+from solver.element import Element, ElementSet, dense_pattern
+from solver.state import StateBlock
 
 Array = NDArray[np.float64]
 _PAIRS = {0: (2, 1), 1: (0, 2), 2: (1, 0)}  # rotation about t, n, b (Eq. 22 rows)
 
 
-class CurveSliding:
+class CurveSliding(Element):
     """Curve sliding joint between the curve of ``body_k`` and a point of ``body_l``.
 
     Parameters
@@ -83,10 +84,10 @@ class CurveSliding:
             self.o = np.asarray(placement[1], dtype=float)
         self.eta = Scalar(f"{name}.eta", 0.0, units="1", long_name="curve parameter")
 
-    def scalars(self) -> list:
-        return [self.eta]
+    def states(self) -> list[StateBlock]:
+        return self.eta.states()
 
-    def key(self) -> tuple:
+    def group_key(self) -> tuple:
         return (id(self.curve), self.rot, isinstance(self.body_l, PointMass))
 
     def local_point(self, eta) -> Array:
@@ -97,8 +98,9 @@ class CurveSliding:
         """Frenet triad (columns t, n, b) in body k's frame."""
         return self.Q @ self.curve.frame(eta)[0]
 
-    def prepare(self, s) -> float:
-        """Initial η and the point of body ℓ (called by the batch's setup)."""
+    def initial_contact(self, s) -> tuple[float, np.ndarray, np.ndarray]:
+        """(η0, the point b of body ℓ in its frame (m), the Frenet triad at η0 in body ℓ's
+        frame) from the initial configuration; checks that the point lies on the curve."""
         k, l_ = self.body_k, self.body_l
         xk0, rk0 = s._pose0(k)
         xl0, rl0 = s._pose0(l_)
@@ -113,36 +115,22 @@ class CurveSliding:
         if gap > 1e-6 * scale:
             raise ValueError(f"curve joint {self.name!r}: the point {p_glob.tolist()} of "
                              f"{l_.name!r} is {gap:.3g} m off the curve")
-        self.eta.initial = eta0
-        s.q0_raw[s.scalar_index[self.eta]] = eta0
-        self.b = s.to_local_point(l_, p_glob)
-        # Frenet triad at η0 expressed in body ℓ's frame (columns t, n, b)
-        self.c = rl0.T @ rk0 @ self.local_frame(eta0)
-        return eta0
-
-    def frenet(self, s, q: Array) -> Array:
-        """Frenet triad (columns t, n, b) at the contact point, global frame."""
-        eta = q[s.scalar_index[self.eta]]
-        ok = s.offset[self.body_k]
-        dk = q[ok + 3 : ok + 12].reshape(3, 3)
-        return dk.T @ self.local_frame(eta)
+        return eta0, s.to_local_point(l_, p_glob), rl0.T @ rk0 @ self.local_frame(eta0)
 
 
-class CurveSlidingSet(HolonomicGroup):
+class CurveSlidingSet(ElementSet):
     """All curve sliding joints that share one curve, rotation set and kind of body ℓ,
     evaluated together: one curve evaluation and a few einsums per call for J joints."""
 
-    def __init__(self, joints: list[CurveSliding]) -> None:
+    def __init__(self, joints: list[CurveSliding], s) -> None:
+        super().__init__(joints, s)
         self.joints = joints
-        self.name = ",".join(j.name for j in joints)
         self.curve = joints[0].curve
         self.rot = joints[0].rot
         self.l_rigid = not isinstance(joints[0].body_l, PointMass)
-
-    def setup(self, s) -> None:
         js = self.joints
-        for j in js:
-            j.prepare(s)
+        contact = [j.initial_contact(s) for j in js]
+        self._eta0 = np.array([c[0] for c in contact])
         nj = len(js)
         self.nj = nj
         self.ok = np.array([s.offset[j.body_k] for j in js])
@@ -150,8 +138,8 @@ class CurveSlidingSet(HolonomicGroup):
         self.ie = np.array([s.scalar_index[j.eta] for j in js])
         self.Q = np.array([j.Q for j in js])
         self.o = np.array([j.o for j in js])
-        self.b = np.array([j.b for j in js])
-        self.c = np.array([j.c for j in js])
+        self.b = np.array([c[1] for c in contact])
+        self.c = np.array([c[2] for c in contact])
         nl = 12 if self.l_rigid else 3
         cols = np.concatenate([self.ok[:, None] + np.arange(12), self.ol[:, None] + np.arange(nl),
                                self.ie[:, None]], axis=1)
@@ -175,15 +163,49 @@ class CurveSlidingSet(HolonomicGroup):
         self._rb = np.array([_PAIRS[x][1] for x in self.rot], dtype=np.int64)
         self._memo_curve: dict = {}
         self._memo_eval: dict = {}
-        self.hess_rows = np.concatenate([np.repeat(c, self.nc) for c in cols])
-        self.hess_cols = np.concatenate([np.tile(c, self.nc) for c in cols])
+        self._structure(cols)
         # W[j, r, β, γ] = R*_βa c_γb − R*_βb c_γa needs R*; precompute c columns per row
         self._cb = self.c[:, :, self._rb]  # (J, 3, r): c_γ b_r
         self._ca = self.c[:, :, self._ra]
 
-    @property
-    def m(self) -> int:
-        return self.nj * self.mj
+    def _structure(self, cols: np.ndarray) -> None:
+        """Structural non-zeros of the Jacobian rows and of the λ-weighted Hessian."""
+        nc, mj, je, dl = self.nc, self.mj, self.je, self.dl
+        jm = np.zeros((mj, nc), dtype=bool)
+        for i in range(3):  # displacement rows: x_k, p*_α d_α^k, x_ℓ, b_α d_α^ℓ, η
+            jm[i, [i, 3 + i, 6 + i, 9 + i, self.xl + i, je]] = True
+            if self.l_rigid:
+                jm[i, [dl + i, dl + 3 + i, dl + 6 + i]] = True
+        jm[3:, 3:12] = True  # rotation rows: directors of both bodies and η
+        jm[3:, je] = True
+        if self.l_rigid:
+            jm[3:, dl : dl + 9] = True
+        hm = np.zeros((nc, nc), dtype=bool)
+        hm[je, 3:12] = hm[3:12, je] = hm[je, je] = True
+        if self.rot:
+            hm[je, dl : dl + 9] = hm[dl : dl + 9, je] = True
+            hm[3:12, dl : dl + 9] = hm[dl : dl + 9, 3:12] = True
+        self._jr, self._jc = np.nonzero(jm)
+        self._hr, self._hc = np.nonzero(hm)
+        nj = len(cols)
+        self.n_holonomic = nj * mj
+        self.hol_rows = (np.arange(nj)[:, None] * mj + self._jr).ravel()
+        self.hol_cols = cols[:, self._jc].ravel()
+        self.hess_rows = cols[:, self._hr].ravel()
+        self.hess_cols = cols[:, self._hc].ravel()
+
+    def initialize(self, q0: Array) -> None:
+        q0[self.ie] = self._eta0
+
+    def row_owner(self, row: int, holonomic: bool = True) -> str:
+        return self.joints[row // self.mj].name
+
+    def _pack(self, g: Array) -> Array:
+        return g.reshape(self.nj, self.mj, self.nc)[:, self._jr, self._jc].ravel()
+
+    def constraint(self, q: Array, t: float) -> tuple[Array, Array]:
+        c, g = self.evaluate(q)
+        return c, self._pack(g)
 
     def _curve_state(self, eta: Array):
         """p*, p*', p*'' (J, 3) and R*, dR*/dη (J, 3, 3) in body k frames, memoized."""
@@ -263,7 +285,8 @@ class CurveSlidingSet(HolonomicGroup):
         self._memo_eval[key] = out
         return out
 
-    def discrete_jacobian(self, qi: Array, qf: Array) -> Array:
+    def discrete_jacobian(self, qi: Array, qf: Array, ti: float = 0.0,
+                          tf: float = 0.0) -> Array:
         """Exact discrete derivative Ḡ with Ḡ·(q_f − q_i) = C(q_f) − C(q_i).
 
         Product rule with averages and the secant of the curve (design note): Δ(p_α d_α) =
@@ -294,9 +317,9 @@ class CurveSlidingSet(HolonomicGroup):
             g[:, 3:, self.dl : self.dl + 9] = np.einsum("jrbg,jbi->jrgi", wbar, dkbar).reshape(
                 nj, -1, 9)
             g[:, 3:, self.je] = np.einsum("jrbg,jbg->jr", dw, xbar)
-        return g.reshape(nj * self.mj, self.nc)
+        return self._pack(g)
 
-    def hessian(self, q: Array, lam: Array) -> Array:
+    def constraint_hessian(self, q: Array, t: float, lam: Array) -> Array:
         eta, _p, p1, p2, r, dr, dk, dl = self._state(q)
         nj, nc, je = self.nj, self.nc, self.je
         lam = lam.reshape(nj, self.mj)
@@ -327,48 +350,30 @@ class CurveSlidingSet(HolonomicGroup):
         h = h + np.transpose(h, (0, 2, 1))
         idx = np.arange(nc)
         h[:, idx, idx] = diag
-        return h.ravel()
+        return h[:, self._hr, self._hc].ravel()
 
 
-def batch_curve_joints(items: list) -> list:
-    """Replace CurveSliding declarations by one :class:`CurveSlidingSet` per batch key."""
-    order, groups = [], {}
-    for it in items:
-        if isinstance(it, CurveSliding):
-            key = it.key()
-            if key not in groups:
-                groups[key] = []
-                order.append(key)
-            groups[key].append(it)
-        else:
-            order.append(it)
-    return [CurveSlidingSet(groups[k]) if isinstance(k, tuple) and k in groups else k
-            for k in order]
-
-
-class ArcLength(NonholonomicGroup):
+class ArcLength(Element):
     """ṡ − |p*'(η)| η̇ = 0 (Eq. 25): the arc length s travelled along a sliding joint's curve.
 
-    A declaration: the system evaluates all of them on one curve together (ArcLengthSet)."""
+    A declaration: all of them on one curve are evaluated together (:class:`ArcLengthSet`)."""
 
     def __init__(self, joint: CurveSliding, name: str | None = None, s0: float = 0.0) -> None:
         self.joint = joint
         self.name = name or f"{joint.name}.s"
         self.s = Scalar(self.name, s0, units="m", long_name="arc length along the curve")
 
-    def scalars(self) -> list:
-        return [self.s]
+    def states(self) -> list[StateBlock]:
+        return self.s.states()
 
-    def setup(self, sys) -> None:
-        self.i_s = sys.scalar_index[self.s]
-        self.i_e = sys.scalar_index[self.joint.eta]
-        self.cols = np.array([[self.i_s, self.i_e]], dtype=np.int64)
+    def group_key(self) -> int:
+        return id(self.joint.curve)
 
 
-class Rolling(NonholonomicGroup):
+class Rolling(Element):
     """Rolling without slip of a pin on a curve: ṡ + σ r (ω_pin − ω_link)·n = 0 (Eq. 5).
 
-    A declaration: the system evaluates all of them together (RollingSet).
+    A declaration: all of them are evaluated together (:class:`RollingSet`).
 
     Parameters
     ----------
@@ -399,27 +404,35 @@ class Rolling(NonholonomicGroup):
         self.r, self.side = float(radius), side
         self.axis = np.asarray(axis, dtype=float) / np.linalg.norm(axis)
 
-    def setup(self, sys) -> None:
-        self.op, self.ol = sys.offset[self.pin], sys.offset[self.link]
-        cols = [sys.scalar_index[self.arc.s]]
-        cols += list(range(self.op + 3, self.op + 12)) + list(range(self.ol + 3, self.ol + 12))
-        self.cols = np.array([cols], dtype=np.int64)
+
+class _RelationSet(ElementSet):
+    """Nonholonomic rows over a fixed set of columns per row (``cols``, m × k)."""
+
+    def _rows(self, cols: np.ndarray) -> None:
+        self.cols = cols
+        self.n_nonholonomic = len(cols)
+        self.nh_rows, self.nh_cols = dense_pattern(cols)
+        self.row_names = [e.name for e in self.elements]
+
+    def row_owner(self, row: int, holonomic: bool = False) -> str:
+        return self.row_names[row]
+
+    def nh_matrix(self, q: Array) -> Array:
+        return self.matrix(q).ravel()
+
+    def nh_derivative(self, q: Array, dq: Array) -> Array:
+        return self.derivative(q, dq).ravel()
 
 
-class ArcLengthSet(NonholonomicGroup):
+class ArcLengthSet(_RelationSet):
     """All :class:`ArcLength` relations on one curve, vectorized."""
 
-    def __init__(self, arcs: list[ArcLength]) -> None:
-        self.arcs = arcs
-        self.name = ",".join(a.name for a in arcs)
-        self.row_names = [a.name for a in arcs]
-
-    def setup(self, sys) -> None:
-        for a in self.arcs:
-            a.setup(sys)
-        self.curve = self.arcs[0].joint.curve
-        self.i_e = np.array([a.i_e for a in self.arcs])
-        self.cols = np.array([[a.i_s, a.i_e] for a in self.arcs], dtype=np.int64)
+    def __init__(self, arcs: list[ArcLength], sys) -> None:
+        super().__init__(arcs, sys)
+        self.curve = arcs[0].joint.curve
+        self.i_e = np.array([sys.scalar_index[a.joint.eta] for a in arcs])
+        self._rows(np.array([[sys.scalar_index[a.s], sys.scalar_index[a.joint.eta]]
+                             for a in arcs], dtype=np.int64))
 
     def matrix(self, q: Array) -> Array:
         sp_ = np.linalg.norm(self.curve.derivatives(q[self.i_e], 1)[1], axis=-1)
@@ -428,27 +441,24 @@ class ArcLengthSet(NonholonomicGroup):
     def derivative(self, q: Array, dq: Array) -> Array:
         d = self.curve.derivatives(q[self.i_e], 2)
         sp_ = np.linalg.norm(d[1], axis=-1)
-        out = np.zeros((len(self.arcs), 2))
+        out = np.zeros((len(self.i_e), 2))
         out[:, 1] = -np.sum(d[1] * d[2], axis=-1) / sp_ * dq[self.i_e]
         return out
 
 
-class RollingSet(NonholonomicGroup):
+class RollingSet(_RelationSet):
     """All :class:`Rolling` relations of a model, vectorized."""
 
-    def __init__(self, rolls: list[Rolling]) -> None:
-        self.rolls = rolls
-        self.name = ",".join(r.name for r in rolls)
-        self.row_names = [r.name for r in rolls]
-
-    def setup(self, sys) -> None:
-        for r in self.rolls:
-            r.setup(sys)
-        self.cols = np.concatenate([r.cols for r in self.rolls])
-        self.ip = np.array([r.op for r in self.rolls])[:, None] + 3 + np.arange(9)
-        self.il = np.array([r.ol for r in self.rolls])[:, None] + 3 + np.arange(9)
-        self.k = np.array([0.5 * r.side * r.r for r in self.rolls])[:, None, None]
-        self.axis = np.array([r.axis for r in self.rolls])
+    def __init__(self, rolls: list[Rolling], sys) -> None:
+        super().__init__(rolls, sys)
+        op = np.array([sys.offset[r.pin] for r in rolls])
+        ol = np.array([sys.offset[r.link] for r in rolls])
+        self.ip = op[:, None] + 3 + np.arange(9)
+        self.il = ol[:, None] + 3 + np.arange(9)
+        i_s = np.array([sys.scalar_index[r.arc.s] for r in rolls])
+        self._rows(np.concatenate([i_s[:, None], self.ip, self.il], axis=1).astype(np.int64))
+        self.k = np.array([0.5 * r.side * r.r for r in rolls])[:, None, None]
+        self.axis = np.array([r.axis for r in rolls])
 
     def _get(self, q):
         dp = q[self.ip].reshape(-1, 3, 3)
@@ -458,7 +468,7 @@ class RollingSet(NonholonomicGroup):
 
     def matrix(self, q: Array) -> Array:
         dp, dl, n = self._get(q)
-        nj = len(self.rolls)
+        nj = len(self.ip)
         out = np.empty((nj, 19))
         out[:, 0] = 1.0
         out[:, 1:10] = (self.k * _cross(n, dp)).reshape(nj, 9)
@@ -469,7 +479,7 @@ class RollingSet(NonholonomicGroup):
         dp, dl, n = self._get(q)
         ep = dq[self.ip].reshape(-1, 3, 3)
         el = dq[self.il].reshape(-1, 3, 3)
-        nj = len(self.rolls)
+        nj = len(self.ip)
         w = (_cross(dp, ep) - _cross(dl, el)).sum(axis=1)  # ∂/∂n
         out = np.zeros((nj, 19))
         out[:, 1:10] = (self.k * _cross(ep, n)).reshape(nj, 9)
@@ -478,33 +488,9 @@ class RollingSet(NonholonomicGroup):
         return out
 
 
-def batch_nonholonomic(items: list) -> list:
-    """Replace ArcLength and Rolling declarations by vectorized sets."""
-    arcs: dict[int, list] = {}
-    rolls: list = []
-    out: list = []
-    for it in items:
-        if isinstance(it, ArcLength):
-            key = id(it.joint.curve)
-            if key not in arcs:
-                arcs[key] = []
-                out.append(("arc", key))
-            arcs[key].append(it)
-        elif isinstance(it, Rolling):
-            if not rolls:
-                out.append(("roll", 0))
-            rolls.append(it)
-        else:
-            out.append(it)
-    res = []
-    for it in out:
-        if isinstance(it, tuple) and it[0] == "arc":
-            res.append(ArcLengthSet(arcs[it[1]]))
-        elif isinstance(it, tuple) and it[0] == "roll":
-            res.append(RollingSet(rolls))
-        else:
-            res.append(it)
-    return res
+CurveSliding.set_class = CurveSlidingSet
+ArcLength.set_class = ArcLengthSet
+Rolling.set_class = RollingSet
 
 
 def _cross(a: Array, b: Array) -> Array:

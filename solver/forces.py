@@ -1,98 +1,59 @@
-"""Force elements: gravity, springs and dampers, applied loads.
+"""Force elements: gravity, springs and dampers, rotational springs and dampers, applied loads.
 
-Conservative elements give a potential, its gradient and Hessian and an exact discrete gradient
-between two configurations (∇̄V·(q_f − q_i) = V(q_f) − V(q_i)), so that the energy-preserving
-scheme conserves energy to roundoff. Non-conservative elements (dampers, applied loads) give a
+Each declaration is passive data; its set evaluates all instances together. Conservative
+elements give a potential, its gradient and Hessian and an exact discrete gradient between two
+configurations (∇̄V·(q_f − q_i) = V(q_f) − V(q_i)), so that the energy-preserving scheme
+conserves energy to roundoff. Non-conservative elements (dampers, applied loads) give a
 generalized force f(q, v, t) and its Jacobians; the integrators book their work.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Hashable
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.sparse as sp
 from numpy.typing import ArrayLike, NDArray
 
-from solver.bodies import Body, PointMass, PrescribedBody
+from solver.bodies import Body, PointMass, PrescribedBody, RigidBody
+from solver.element import Element, ElementSet
 from solver.quadratic import VecExpr
 
 Array = NDArray[np.float64]
-EMPTY_I = np.zeros(0, dtype=np.int64)
-EMPTY_F = np.zeros(0)
 
 
-def gonzalez(grad_mid: Array, f_i: float, f_f: float, dq: Array) -> Array:
-    """Gonzalez (1996) discrete gradient: ∇f(q_m) corrected along Δq so that ∇̄f·Δq = Δf."""
-    d2 = float(dq @ dq)
-    if d2 < 1e-28:
-        return grad_mid
-    return grad_mid + (f_f - f_i - grad_mid @ dq) * dq / d2
+def gonzalez_rows(grad_mid: Array, f_i: Array, f_f: Array, dq: Array) -> Array:
+    """Gonzalez (1996) discrete gradients of J scalar functions at once: each row of
+    ``grad_mid`` (J, k) corrected along its ``dq`` row so that ∇̄f·Δq = Δf."""
+    d2 = np.einsum("ij,ij->i", dq, dq)
+    ok = d2 > 1e-28
+    corr = np.where(ok, (f_f - f_i - np.einsum("ij,ij->i", grad_mid, dq))
+                    / np.where(ok, d2, 1.0), 0.0)
+    return grad_mid + corr[:, None] * dq
 
 
-class ForceElement:
-    """Interface; every method has a do-nothing default."""
-
-    has_potential = False
-    has_force = False
-    hess_rows = EMPTY_I
-    hess_cols = EMPTY_I
-    jac_rows = EMPTY_I
-    jac_cols = EMPTY_I
-
-    def setup(self, system) -> None: ...
-    def accept(self, q: Array) -> None:
-        """Called after every converged step (e.g. to unwrap angles)."""
-    def potential(self, q: Array) -> float:
-        return 0.0
-    def gradient(self, q: Array) -> tuple[NDArray[np.int64], Array]:
-        return EMPTY_I, EMPTY_F
-    def discrete_gradient(self, qi: Array, qf: Array) -> tuple[NDArray[np.int64], Array]:
-        return self.gradient(0.5 * (qi + qf))
-    def hessian(self, q: Array) -> Array:
-        return EMPTY_F
-    def generalized_force(self, q: Array, v: Array, t: float) -> tuple[NDArray[np.int64], Array]:
-        """Non-conservative generalized force (indices, values) at (q, v, t)."""
-        return EMPTY_I, EMPTY_F
-    def force_jacobians(self, q: Array, v: Array, t: float) -> tuple[Array, Array]:
-        """(∂f/∂q, ∂f/∂v) values at the (jac_rows, jac_cols) pattern."""
-        return EMPTY_F, EMPTY_F
+def _outer_pattern(idx: NDArray[np.int64]) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+    """(rows, cols) of the dense k × k blocks over each row of ``idx`` (J, k)."""
+    k = idx.shape[1]
+    return np.repeat(idx, k, axis=1).ravel(), np.tile(idx, (1, k)).ravel()
 
 
-def _matrix(b: VecExpr) -> tuple[NDArray[np.int64], NDArray[np.int64], Array]:
-    """Sparse rows/cols/vals of the 3×n map q ↦ (vector expression − const)."""
-    rows, cols, vals = [], [], []
-    for c, o in b.terms:
-        for k in range(3):
-            rows.append(k)
-            cols.append(o + k)
-            vals.append(c)
-    return np.array(rows, dtype=np.int64), np.array(cols, dtype=np.int64), np.array(vals)
-
-
-class _Linear3:
-    """Δ(q) = B q + b0 as a small dense block over the touched coordinates."""
-
-    def __init__(self, expr: VecExpr) -> None:
-        r, c, v = _matrix(expr)
-        self.idx, inv = np.unique(c, return_inverse=True)
-        self.B = np.zeros((3, len(self.idx)))
-        np.add.at(self.B, (r, inv), v)
-        self.b0 = expr.const.copy()
-
-    def __call__(self, q: Array) -> Array:
-        return self.B @ q[self.idx] + self.b0
-
-
+# ------------------------------------------------------------------------------- gravity
 @dataclass(eq=False)
-class Gravity(ForceElement):
-    """Uniform gravity field g (m/s²) acting on every free body."""
+class Gravity(Element):
+    """Uniform gravity field g (m/s²) acting on every free body of the model."""
 
     g: ArrayLike = (0.0, 0.0, -9.81)
-    has_potential = True
+    name: str = "gravity"
 
-    def setup(self, system) -> None:
-        g = np.asarray(self.g, dtype=float)
+
+class GravitySet(ElementSet):
+    """Potential Σ −m g·x over the bodies with mass (linear: constant gradient)."""
+
+    def __init__(self, elements, system) -> None:
+        super().__init__(elements, system)
+        g = np.sum([np.asarray(e.g, dtype=float) for e in elements], axis=0)
         idx, val = [], []
         for body in system.bodies:
             if isinstance(body, PrescribedBody) or body.mass == 0.0:
@@ -100,21 +61,46 @@ class Gravity(ForceElement):
             o = system.offset[body]
             idx.extend(range(o, o + 3))
             val.extend(-body.mass * g)
-        self._idx = np.array(idx, dtype=np.int64)
+        self.grad_idx = np.array(idx, dtype=np.int64)
         self._val = np.array(val)
 
     def potential(self, q):
-        return float(self._val @ q[self._idx])
+        return float(self._val @ q[self.grad_idx])
 
     def gradient(self, q):
-        return self._idx, self._val
+        return self._val
 
     def discrete_gradient(self, qi, qf):
-        return self._idx, self._val
+        return self._val
+
+
+Gravity.set_class = GravitySet
+
+
+# ------------------------------------------------------------------------------- springs
+def _matrix(expr: VecExpr, n: int) -> sp.csr_matrix:
+    """The 3 × n map q ↦ (vector expression − its constant)."""
+    rows, cols, vals = [], [], []
+    for c, o in expr.terms:
+        for k in range(3):
+            rows.append(k)
+            cols.append(o + k)
+            vals.append(c)
+    return sp.csr_matrix((vals, (rows, cols)), shape=(3, n))
+
+
+def _psd(x: ArrayLike, what: str, name: str) -> Array:
+    a = np.asarray(x, dtype=float)
+    a = a * np.eye(3) if a.ndim == 0 else (np.diag(a) if a.shape == (3,) else a)
+    if (a.shape != (3, 3) or not np.all(np.isfinite(a))
+            or np.linalg.eigvalsh(0.5 * (a + a.T)).min() < -1e-12):
+        raise ValueError(f"spring {name!r}: {what} must be ≥ 0 (scalar, 3 values or a positive "
+                         "semidefinite 3x3 matrix)")
+    return a
 
 
 @dataclass(eq=False)
-class Spring(ForceElement):
+class Spring(Element):
     """Linear spring and damper between two body points, or a point and the ground.
 
     Force on ``body_b`` = −K (Δ − Δ0) − C Δ̇, with Δ = p_b − p_a and Δ0 its initial value (or
@@ -130,57 +116,79 @@ class Spring(ForceElement):
     damping: ArrayLike = 0.0
     rest: ArrayLike | None = None
 
-    def setup(self, system) -> None:
-        def mat(x, what):
-            a = np.asarray(x, dtype=float)
-            a = a * np.eye(3) if a.ndim == 0 else (np.diag(a) if a.shape == (3,) else a)
-            if a.shape != (3, 3) or np.linalg.eigvalsh(0.5 * (a + a.T)).min() < -1e-12:
-                raise ValueError(f"spring {self.name!r}: {what} must be ≥ 0 (scalar, 3 values "
-                                 "or a positive semidefinite 3x3 matrix)")
-            return a
-        self.K = mat(self.stiffness, "stiffness")
-        self.C = mat(self.damping, "damping")
-        self.has_potential = bool(np.any(self.K))
-        self.has_force = bool(np.any(self.C))
-        p = np.asarray(self.point, dtype=float)
-        pb = system.point(self.body_b, system.to_local_point(self.body_b, p))
-        pa = (VecExpr([], p.copy()) if self.body_a is None
-              else system.point(self.body_a, system.to_local_point(self.body_a, p)))
-        self.delta = _Linear3(pb - pa)
-        d0 = self.delta(system.q0_raw)
-        self.d0 = d0 if self.rest is None else np.asarray(self.rest, dtype=float)
-        i = self.delta.idx
-        self.hess_rows = np.repeat(i, len(i))
-        self.hess_cols = np.tile(i, len(i))
-        self.jac_rows, self.jac_cols = self.hess_rows, self.hess_cols
-        self._H = self.delta.B.T @ self.K @ self.delta.B
-        self._D = self.delta.B.T @ self.C @ self.delta.B
+    def __post_init__(self) -> None:
+        self.K = _psd(self.stiffness, "stiffness", self.name)
+        self.C = _psd(self.damping, "damping", self.name)
+
+
+class SpringSet(ElementSet):
+    """All linear springs and dampers: Δ = B q + b (B sparse, 3J × n), V = ½ eᵀ K e with
+    e = Δ − Δ0 and f = −Bᵀ C B v; K, C block diagonal. All matrices are built once."""
+
+    def __init__(self, elements, system) -> None:
+        super().__init__(elements, system)
+        n = system.n
+        blocks, consts = [], []
+        for e in elements:
+            p = np.asarray(e.point, dtype=float)
+            pb = system.point(e.body_b, system.to_local_point(e.body_b, p))
+            pa = (VecExpr([], p.copy()) if e.body_a is None
+                  else system.point(e.body_a, system.to_local_point(e.body_a, p)))
+            d = pb - pa
+            blocks.append(_matrix(d, n))
+            consts.append(d.const)
+        b = sp.vstack(blocks).tocsr()
+        q0 = system.q0_raw
+        delta0 = b @ q0 + np.concatenate(consts)
+        rest = np.concatenate([delta0[3 * i : 3 * i + 3] if e.rest is None
+                               else np.asarray(e.rest, dtype=float)
+                               for i, e in enumerate(elements)])
+        c = np.concatenate(consts) - rest  # e = B q + c
+        k = sp.block_diag([e.K for e in elements], format="csr")
+        dmp = sp.block_diag([e.C for e in elements], format="csr")
+        stiff = (b.T @ k @ b).tocsr()
+        stiff.eliminate_zeros()
+        damp = (b.T @ dmp @ b).tocsr()
+        damp.eliminate_zeros()
+        # potential: on the columns the stiff springs touch
+        self.grad_idx = np.unique(stiff.nonzero()[0]).astype(np.int64)
+        sub = stiff[self.grad_idx][:, self.grad_idx].tocoo()
+        self._H = sub.tocsr()
+        self._g0 = (b.T @ (k @ c))[self.grad_idx]
+        self.stiff_rows, self.stiff_cols = self.grad_idx[sub.row], self.grad_idx[sub.col]
+        self._hvals = sub.data
+        self._B, self._c, self._K = b, c, k
+        # dampers
+        self.force_idx = np.unique(damp.nonzero()[0]).astype(np.int64)
+        dsub = damp[self.force_idx][:, self.force_idx].tocoo()
+        self._D = dsub.tocsr()
+        self.fv_rows, self.fv_cols = self.force_idx[dsub.row], self.force_idx[dsub.col]
+        self._dvals = -dsub.data
+        self.nonconservative = len(self.force_idx) > 0
 
     def potential(self, q):
-        e = self.delta(q) - self.d0
-        return 0.5 * float(e @ self.K @ e)
+        e = self._B @ q + self._c
+        return 0.5 * float(e @ (self._K @ e))
 
     def gradient(self, q):
-        return self.delta.idx, self.delta.B.T @ (self.K @ (self.delta(q) - self.d0))
+        return self._H @ q[self.grad_idx] + self._g0
 
-    # quadratic potential: the midpoint gradient is the exact discrete gradient
-    def hessian(self, q):
-        return self._H.ravel()
+    def stiffness(self, q):
+        return self._hvals
 
-    def generalized_force(self, q, v, t):
-        rate = self.delta.B @ v[self.delta.idx]
-        return self.delta.idx, -self.delta.B.T @ (self.C @ rate)
+    def force(self, q, v, t):
+        return -(self._D @ v[self.force_idx])
 
     def force_jacobians(self, q, v, t):
-        return np.zeros(self._D.size), -self._D.ravel()
-
-    def tension(self, q, v) -> Array:
-        """Force (N) the element applies to body_b, global frame."""
-        return -self.K @ (self.delta(q) - self.d0) - self.C @ (self.delta.B @ v[self.delta.idx])
+        return np.zeros(0), self._dvals
 
 
+Spring.set_class = SpringSet
+
+
+# ------------------------------------------------------------------ rotational springs
 @dataclass(eq=False)
-class RelativeRotation(ForceElement):
+class RelativeRotation(Element):
     """Rotational spring and damper about the common axis of two bodies (e.g. over a revolute).
 
     Moment on ``body_b`` about ``axis`` = −k (φ − φ0) − c φ̇ (N·m), φ the relative rotation of
@@ -195,98 +203,131 @@ class RelativeRotation(ForceElement):
     damping: float = 0.0
     phi0: float = 0.0
 
-    def setup(self, system) -> None:
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.stiffness) and np.isfinite(self.damping)
+                and self.stiffness >= 0 and self.damping >= 0):
+            raise ValueError(f"rotational spring {self.name!r}: stiffness and damping must be "
+                             "finite and ≥ 0")
+        for b in (self.body_a, self.body_b):
+            if isinstance(b, PointMass):
+                raise ValueError(f"rotational spring {self.name!r}: {b.name!r} has no rotation")
+
+    def group_key(self) -> Hashable:
+        return (self.body_a is None, self.stiffness != 0.0, self.damping != 0.0)
+
+
+class RelativeRotationSet(ElementSet):
+    """Rotational springs and dampers, vectorized: with e_i^a, e_i^b the joint triad carried
+    by each body, c = e1ᵃ·e1ᵇ and s = −e1ᵃ·e2ᵇ are bilinear in the directors and
+    φ = atan2(s, c) (unwrapped against the last converged step)."""
+
+    def __init__(self, elements, system) -> None:
         from solver.joints import _triad
 
-        if self.stiffness < 0 or self.damping < 0:
-            raise ValueError(f"rotational spring {self.name!r}: stiffness and damping must be ≥ 0")
-        tri = _triad(self.axis, None)
-
-        def vec(body, i):
-            if body is None:
-                return VecExpr([], tri[:, i].copy())
-            if isinstance(body, PointMass):
-                raise ValueError(f"rotational spring {self.name!r}: {body.name!r} has no rotation")
-            return system.vector(body, system.to_local_vector(body, tri[:, i]))
-
-        self.has_potential = self.stiffness != 0.0
-        self.has_force = self.damping != 0.0
-        e1a, e1b, e2b = vec(self.body_a, 0), vec(self.body_b, 0), vec(self.body_b, 1)
-        self.e3 = [vec(self.body_a, 2), vec(self.body_b, 2)]
-        self.cs = _Linear2(e1a, e1b, e2b)
-        i = self.cs.idx
-        self.hess_rows = np.repeat(i, len(i))
-        self.hess_cols = np.tile(i, len(i))
-        self.jac_rows, self.jac_cols = self.hess_rows, self.hess_cols
-        self._ref = 0.0  # unwrapped angle at the last converged step
+        super().__init__(elements, system)
+        e0 = elements[0]
+        self.grounded = e0.body_a is None
+        nj = len(elements)
+        tri = [_triad(e.axis, None) for e in elements]
+        # local director coefficients: e1ᵃ = Σ_α ca_α d_α^a (or constant), e1ᵇ, e2ᵇ likewise
+        self._cb1 = np.array([system.to_local_vector(e.body_b, t[:, 0])
+                              for e, t in zip(elements, tri, strict=True)])
+        self._cb2 = np.array([system.to_local_vector(e.body_b, t[:, 1])
+                              for e, t in zip(elements, tri, strict=True)])
+        ib = np.array([system.offset[e.body_b] + 3 + np.arange(9) for e in elements])
+        if self.grounded:
+            self._ea = np.array([t[:, 0] for t in tri])
+            self.idx = ib
+        else:
+            self._ca1 = np.array([system.to_local_vector(e.body_a, t[:, 0])
+                                  for e, t in zip(elements, tri, strict=True)])
+            ia = np.array([system.offset[e.body_a] + 3 + np.arange(9) for e in elements])
+            self.idx = np.concatenate([ia, ib], axis=1)
+        self.k = np.array([e.stiffness for e in elements])
+        self.c = np.array([e.damping for e in elements])
+        self.phi0 = np.array([e.phi0 for e in elements])
+        self._ref = np.zeros(nj)  # unwrapped angle at the last converged step
+        flat = self.idx.ravel()
+        pr, pc = _outer_pattern(self.idx)
+        if e0.stiffness != 0.0:
+            self.grad_idx = flat
+            self.stiff_rows, self.stiff_cols = pr, pc
+        if e0.damping != 0.0:
+            self.force_idx = flat
+            self.fv_rows, self.fv_cols = pr, pc
+            self.nonconservative = True
 
     def accept(self, q):
         self._ref = self._phi_grad(q)[0]
 
     def _phi_grad(self, q):
-        """φ (rad, unwrapped against the last converged step) and its gradient."""
-        c, s, gc, gs = self.cs(q)
+        """φ (J,) unwrapped against the last converged step, and ∂φ/∂q at ``idx`` (J, k)."""
+        nj = len(self.k)
+        db = q[self.idx[:, -9:]].reshape(nj, 3, 3)  # rows d1, d2, d3 of body b
+        eb1 = np.einsum("ja,jai->ji", self._cb1, db)
+        eb2 = np.einsum("ja,jai->ji", self._cb2, db)
+        if self.grounded:
+            ea = self._ea
+        else:
+            da = q[self.idx[:, :9]].reshape(nj, 3, 3)
+            ea = np.einsum("ja,jai->ji", self._ca1, da)
+        c = np.einsum("ji,ji->j", ea, eb1)
+        s = -np.einsum("ji,ji->j", ea, eb2)
+        # gradients over body b's directors, then body a's
+        gcb = self._cb1[:, :, None] * ea[:, None, :]
+        gsb = -self._cb2[:, :, None] * ea[:, None, :]
         r2 = c * c + s * s
+        gb = ((c[:, None, None] * gsb - s[:, None, None] * gcb) / r2[:, None, None]).reshape(
+            nj, 9)
+        if self.grounded:
+            g = gb
+        else:
+            gca = self._ca1[:, :, None] * eb1[:, None, :]
+            gsa = -self._ca1[:, :, None] * eb2[:, None, :]
+            ga = ((c[:, None, None] * gsa - s[:, None, None] * gca)
+                  / r2[:, None, None]).reshape(nj, 9)
+            g = np.concatenate([ga, gb], axis=1)
         phi = np.arctan2(s, c)
         phi = self._ref + np.angle(np.exp(1j * (phi - self._ref)))
-        return phi, (c * gs - s * gc) / r2
+        return phi, g
+
+    def _energies(self, q):
+        phi, g = self._phi_grad(q)
+        return 0.5 * self.k * (phi - self.phi0) ** 2, phi, g
 
     def potential(self, q):
-        phi, _ = self._phi_grad(q)
-        return 0.5 * self.stiffness * (phi - self.phi0) ** 2
+        return float(self._energies(q)[0].sum())
 
     def gradient(self, q):
-        phi, g = self._phi_grad(q)
-        return self.cs.idx, self.stiffness * (phi - self.phi0) * g
+        _, phi, g = self._energies(q)
+        return ((self.k * (phi - self.phi0))[:, None] * g).ravel()
 
     def discrete_gradient(self, qi, qf):
-        qm = 0.5 * (qi + qf)
-        _, gm = self.gradient(qm)
-        i = self.cs.idx
-        return i, gonzalez(gm, self.potential(qi), self.potential(qf), qf[i] - qi[i])
+        gm = self.gradient(0.5 * (qi + qf)).reshape(self.idx.shape)
+        vi, vf = self._energies(qi)[0], self._energies(qf)[0]
+        return gonzalez_rows(gm, vi, vf, qf[self.idx] - qi[self.idx]).ravel()
 
-    def hessian(self, q):
+    def stiffness(self, q):
         _, g = self._phi_grad(q)
-        return self.stiffness * np.outer(g, g).ravel()  # Gauss–Newton part (exact at φ = φ0)
+        # Gauss–Newton part k ∇φ ∇φᵀ (exact at φ = φ0)
+        return (self.k[:, None, None] * g[:, :, None] * g[:, None, :]).ravel()
 
-    def generalized_force(self, q, v, t):
+    def force(self, q, v, t):
         _, g = self._phi_grad(q)
-        rate = g @ v[self.cs.idx]
-        return self.cs.idx, -self.damping * rate * g
+        rate = np.einsum("jk,jk->j", g, v[self.idx])
+        return (-(self.c * rate)[:, None] * g).ravel()
 
     def force_jacobians(self, q, v, t):
         _, g = self._phi_grad(q)
-        return np.zeros(g.size**2), -self.damping * np.outer(g, g).ravel()
+        return np.zeros(0), (-self.c[:, None, None] * g[:, :, None] * g[:, None, :]).ravel()
 
 
-class _Linear2:
-    """c = e1a·e1b and s = −e1a·e2b with their gradients over the touched coordinates."""
-
-    def __init__(self, e1a: VecExpr, e1b: VecExpr, e2b: VecExpr) -> None:
-        cols = sorted({o + k for e in (e1a, e1b, e2b) for _, o in e.terms for k in range(3)})
-        self.idx = np.array(cols, dtype=np.int64)
-        pos = {c: i for i, c in enumerate(cols)}
-        self.maps = []
-        for e in (e1a, e1b, e2b):
-            b = np.zeros((3, len(cols)))
-            for c, o in e.terms:
-                for k in range(3):
-                    b[k, pos[o + k]] += c
-            self.maps.append((b, e.const))
-
-    def __call__(self, q):
-        ql = q[self.idx]
-        (ba, ca), (bb, cb), (b2, c2) = self.maps
-        ea, eb, e2 = ba @ ql + ca, bb @ ql + cb, b2 @ ql + c2
-        c = ea @ eb
-        s = -ea @ e2
-        gc = eb @ ba + ea @ bb
-        gs = -(e2 @ ba + ea @ b2)
-        return c, s, gc, gs
+RelativeRotation.set_class = RelativeRotationSet
 
 
+# ------------------------------------------------------------------------- applied loads
 @dataclass(eq=False)
-class AppliedLoad(ForceElement):
+class AppliedLoad(Element):
     """Force F(t) (N) at a body point and moment M(t) (N·m), both global, given as functions.
 
     ``point`` is the global position of the application point at t = 0 (it moves with the body).
@@ -298,31 +339,47 @@ class AppliedLoad(ForceElement):
     moment: Callable[[float], ArrayLike] | None = None
     point: ArrayLike | None = None
 
-    has_force = True
-
-    def setup(self, system) -> None:
-        b = self.body
-        o = system.offset[b]
-        p = b.position if self.point is None else np.asarray(self.point, dtype=float)
-        self._local = system.to_local_point(b, p)
-        self._o = o
-        self._rigid = not isinstance(b, PointMass)
-        if self.moment is not None and not self._rigid:
+    def __post_init__(self) -> None:
+        if self.moment is not None and isinstance(self.body, PointMass):
             raise ValueError(f"load {self.name!r}: a point mass cannot take a moment")
-        n = 12 if self._rigid else 3
-        self._idx = np.arange(o, o + n)
 
-    def generalized_force(self, q, v, t):
-        out = np.zeros(len(self._idx))
-        if self.force is not None:
-            f = np.asarray(self.force(t), dtype=float)
-            out[:3] = f
-            if self._rigid:  # virtual work F·δ(x + Σ p_α d_α)
-                for a in range(3):
-                    out[3 + 3 * a : 6 + 3 * a] += self._local[a] * f
-        if self.moment is not None:
-            m = np.asarray(self.moment(t), dtype=float)
-            d = q[self._o + 3 : self._o + 12].reshape(3, 3)
-            # f_α = ½ M × d_α gives Σ d_α × f_α = M (moment as director forces)
-            out[3:] += 0.5 * np.cross(m, d).ravel()
-        return self._idx, out
+    def group_key(self) -> Hashable:
+        return isinstance(self.body, (RigidBody, PrescribedBody))
+
+
+class AppliedLoadSet(ElementSet):
+    """Applied loads on bodies of one kind (rigid or point masses): the user functions are
+    called once each, the virtual work F·δ(x + Σ p_α d_α) + moment terms is vectorized."""
+
+    nonconservative = True
+
+    def __init__(self, elements, system) -> None:
+        super().__init__(elements, system)
+        self.rigid = isinstance(elements[0].body, (RigidBody, PrescribedBody))
+        width = 12 if self.rigid else 3
+        self.idx = np.array([system.offset[e.body] + np.arange(width) for e in elements])
+        self.local = np.array([
+            system.to_local_point(e.body, e.body.position if e.point is None
+                                  else np.asarray(e.point, dtype=float))
+            for e in elements])
+        self.force_idx = self.idx.ravel()
+        self._zero = np.zeros(3)
+
+    def force(self, q, v, t):
+        nj, width = self.idx.shape
+        f = np.array([self._zero if e.force is None else np.asarray(e.force(t), dtype=float)
+                      for e in self.elements])
+        out = np.zeros((nj, width))
+        out[:, :3] = f
+        if self.rigid:
+            out[:, 3:] += (self.local[:, :, None] * f[:, None, :]).reshape(nj, 9)
+            if any(e.moment is not None for e in self.elements):
+                m = np.array([self._zero if e.moment is None
+                              else np.asarray(e.moment(t), dtype=float) for e in self.elements])
+                d = q[self.idx[:, 3:]].reshape(nj, 3, 3)
+                # f_α = ½ M × d_α gives Σ d_α × f_α = M (moment as director forces)
+                out[:, 3:] += 0.5 * np.cross(m[:, None, :], d).reshape(nj, 9)
+        return out.ravel()
+
+
+AppliedLoad.set_class = AppliedLoadSet

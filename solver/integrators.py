@@ -1,25 +1,31 @@
 """Time integrators for constrained multibody systems (index-3: positions exact every step).
 
-Three schemes share one template (scipy ``OdeSolver`` style): :meth:`Integrator.step` owns the
-status, the counters and the bookkeeping of energy and work; each scheme implements
-``_solve`` for one step.
+The :class:`Integrator` template (scipy ``OdeSolver`` style) owns the state (t, q, v, λ, ν),
+Newton with its fallback to full Newton, the factor reuse, the counters, the bookkeeping of
+energy and work, and the failure message that names the element behind the worst residual.
+A scheme supplies only its residual, its tangent weights, its start and its state update.
+Each kind of unknown (:mod:`solver.state`) is treated consistently by every scheme:
+second-order coordinates and algebraic scalars by the scheme's second-order rule, first-order
+states A ẋ = f by the matching first-order rule, and only second-order coordinates carry
+kinetic energy and mechanical work.
 
 * ``ep`` — energy preserving. Midpoint kinematics q_f − q_i = h(v_i + v_f)/2, momentum balance
   with discrete-gradient forces M(v_f − v_i) = −h[∇̄V + Ḡᵀλ + A(q_m)ᵀν − f(q_m, v_m)], position
   constraints C(q_f) = 0 and nonholonomic A(q_m)(q_f − q_i) = 0. Because Ḡ·Δq = C_f − C_i = 0
   and A(q_m)Δq = 0, the constraint forces do no work and E_f − E_i equals exactly the work of
-  the applied loads, dampers and drivers, at any step size.
+  the applied loads, dampers and drivers, at any step size. First-order states: the implicit
+  midpoint rule A(x_f − x_i) = h f(q_m, v_m, x_m, t_m) (A-stable, second order).
 * ``galpha`` — generalized-α (Chung & Hulbert 1993; index-3 form of Arnold & Brüls 2007) with a
   user spectral radius ρ∞; directors live in a vector space, so no Lie-group correction is needed.
+  First-order states use the first-order generalized-α of Jansen, Whiting & Hulbert (2000) in
+  the same form (equations at t_{n+1}, a filtered rate w): α_m = (3ρ∞ − 1)/(2(1 + ρ∞)),
+  α_f = ρ∞/(1 + ρ∞), γ = ½ + α_f − α_m, second order with spectral radius ρ∞ at infinity.
 * ``ed`` — energy decaying: a generalized-α step (second order, high frequencies damped to ρ∞,
   default 0: annihilated) guarded so that, for conservative systems, the energy never grows:
   if a step would increase it, the velocities are scaled back to the previous energy (the
   velocity constraints are homogeneous, so they stay satisfied), and if even the potential
   energy exceeds it, the step is recomputed with the provably decaying scheme
-  Δq = h v_f, MΔv = −h[∇̄V + Ḡᵀλ + …] (E_f − E_i = −½ΔvᵀMΔv ≤ 0). For smooth motion the
-  guard changes the solution by the scheme's own O(h³) local energy error, so second order is
-  kept. (Bauchau's time-discontinuous Galerkin ED scheme is third order; this one is simpler and
-  its decay does not depend on special element discretizations. See the closing note.)
+  Δq = h v_f, MΔv = −h[∇̄V + Ḡᵀλ + …] (E_f − E_i = −½ΔvᵀMΔv ≤ 0).
 
 Multipliers are scaled as impulses (μ = c h² λ) so the Newton matrix stays well conditioned as
 h → 0 (Bottasso, Bauchau & Cardona 2007).
@@ -30,6 +36,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from solver.newton import LinearSolver, newton
@@ -52,8 +59,41 @@ class StepInfo:
     message: str = ""
 
 
+@dataclass
+class Tangent:
+    """Weights of the Newton matrix blocks a scheme asks for (see :meth:`Integrator._tangent`).
+
+    q, v, t: where forces and constraint curvatures are evaluated; mass, first: weights of the
+    mass and first-order mass blocks; stiff: of the potential Hessian; force: of the force
+    Jacobians, with dq_dx the derivative of the evaluation point q by the unknown Δq and dv_dx
+    (per unknown) that of v; hess: of the constraint Hessian; gbar: Jacobian values for the
+    Gᵀμ columns; g_rows: for the constraint rows; a_weight: weight of ∂(A·w)/∂q in the
+    nonholonomic rows, w: the vector A multiplies there.
+    """
+
+    q: Array
+    v: Array
+    t: float
+    mu: Array
+    mass: float
+    first: float
+    stiff: float
+    force: float
+    dq_dx: float
+    dv_dx: Array
+    hess: float
+    gbar: Array
+    g_rows: Array
+    a_weight: float
+    w: Array
+
+
 class Integrator:
-    """Template: state (t, q, v, λ), counters and energy bookkeeping; schemes give ``_solve``."""
+    """Template: state (t, q, v, λ, ν), Newton, counters and energy bookkeeping.
+
+    Schemes implement ``_begin`` (constants of the step), ``_start`` (the plain predictor of
+    x = (Δq, μ, ν)), ``_residual(x)``, ``_tangent_weights(x)`` and ``_finish(x)``.
+    """
 
     name = "base"
 
@@ -70,15 +110,20 @@ class Integrator:
         self.t = float(t0)
         self.reuse = reuse_jacobian
         self.lin = LinearSolver()
+        self.first = system.first_order
+        self.mech = np.ones(system.n, dtype=bool)  # unknowns that carry mechanical work
+        self.mech[self.first] = False
         q = system.q0_raw.copy() if q0 is None else np.asarray(q0, dtype=float).copy()
         self.q = project_positions(system, q, self.t)
         v = system.initial_velocity_guess() if v0 is None else np.asarray(v0, dtype=float)
         self.v = project_velocities(system, self.q, v, self.t)
         self.lam = np.zeros(system.mh)
         self.nu = np.zeros(system.mn)
-        try:  # multipliers of the consistent initial accelerations (reactions at t = 0)
-            _, self.lam, self.nu = initial_accelerations(system, self.q, self.v, self.t,
-                                                         multipliers=True)
+        self._qdd0 = None
+        try:  # consistent initial accelerations, state rates and multipliers (reactions at t0)
+            self._qdd0, self.lam, self.nu = initial_accelerations(system, self.q, self.v,
+                                                                  self.t, multipliers=True)
+            self.v[self.first] = self._qdd0[self.first]  # ẋ from A ẋ = f
         except ValueError:
             pass
         self.work = 0.0
@@ -146,11 +191,75 @@ class Integrator:
         self.n_factorizations += info.factorizations
         if info.converged:
             self.n_steps += 1
-            for f in self.sys.forces:
-                f.accept(self.q)
+            self.sys.accept(self.q)
         return info
 
+    # ------------------------------------------------------------------ the template
     def _solve(self) -> StepInfo:
+        """One step: Newton on the scheme's residual with the scheme's tangent."""
+        self._begin()
+        x0 = self._predict(self._start())
+        res = newton(self._residual, self._jacobian, x0, self._converged, self.lin,
+                     self._reuse_now(), full=self._full)
+        self._reuse_outcome(res)
+        if not res.converged:
+            return StepInfo(False, res.iterations, res.factorizations,
+                            res.message + self._culprit(res))
+        self._finish(res.x)
+        self._history(res.x)
+        return StepInfo(True, res.iterations, res.factorizations)
+
+    def _jacobian(self, x: Array) -> sp.csc_matrix:
+        return self._tangent(self._tangent_weights(x))
+
+    def _tangent(self, w: Tangent) -> sp.csc_matrix:
+        """The Newton matrix from a scheme's weights (one assembly for every scheme)."""
+        s = self.sys
+        blocks = {"M": w.mass * s.M_vals, "A1": w.first * s.A1_vals}
+        if s.block_sizes["K"]:
+            blocks["K"] = w.stiff * s.stiffness_values(w.q)
+        if s.block_sizes["Dq"] or s.block_sizes["Dv"]:
+            jq, jv = s.applied_jacobians(w.q, w.v, w.t)
+            blocks["Dq"] = -w.force * w.dq_dx * jq
+            blocks["Dv"] = -w.force * jv * w.dv_dx[s.Dv_cols]
+        if s.block_sizes["H"]:
+            blocks["H"] = w.hess * s.hessian_values(w.q, w.t, w.mu)
+        blocks["GT"], blocks["G"] = w.gbar, w.g_rows
+        if s.mn:
+            a = s.nonholonomic_values(w.q)
+            blocks["AT"] = a
+            blocks["A"] = a + w.a_weight * s.nonholonomic_derivative(w.q, w.w)
+        return s.kkt(blocks)
+
+    def _culprit(self, res) -> str:
+        """Which element owns the largest residual of a failed Newton iteration."""
+        r = res.residual
+        if r is None:
+            try:
+                r = self._residual(res.x)
+            except (ValueError, FloatingPointError, ZeroDivisionError):
+                return ""
+        if r is None or not len(r):
+            return ""
+        a = np.abs(np.where(np.isfinite(r), r, np.inf))
+        i = int(np.argmax(a))
+        s = self.sys
+        if i < s.n:
+            return f" (largest residual in the dynamics of {s.unknown_owner(i)})"
+        return f" (largest residual in the constraint rows of {s.row_owner(i - s.n)!r})"
+
+    def _begin(self) -> None: ...
+
+    def _start(self) -> Array:
+        raise NotImplementedError
+
+    def _residual(self, x: Array) -> Array:
+        raise NotImplementedError
+
+    def _tangent_weights(self, x: Array) -> Tangent:
+        raise NotImplementedError
+
+    def _finish(self, x: Array) -> None:
         raise NotImplementedError
 
     def _predict(self, default: Array) -> Array:
@@ -170,6 +279,11 @@ class Integrator:
         hist = getattr(self, "_x_hist", ())
         self._x_hist = (*hist[-2:], x.copy())
 
+    def _book_work(self, lam: Array, gv: Array, dq: Array, f: Array) -> None:
+        """Work of the drivers (constraint forces of prescribed motions, −λ·GΔq) and of the
+        applied loads and dampers on the mechanical coordinates over the step."""
+        self.work += -float(lam @ self.sys.gmul(gv, dq)) + float(f[self.mech] @ dq[self.mech])
+
     def violation(self) -> float:
         """max |C(q, t)| over the holonomic rows."""
         c = self.sys.constraint(self.q, self.t)
@@ -178,63 +292,59 @@ class Integrator:
 
 class Midpoint(Integrator):
     """The α-family Δq = h[(1−α)v_i + αv_f], MΔv = −h F̄: α = ½ is the EP scheme, α = 1 the
-    provably decaying fallback of the ED scheme (E_f − E_i = −(α − ½)ΔvᵀMΔv)."""
+    provably decaying fallback of the ED scheme (E_f − E_i = −(α − ½)ΔvᵀMΔv). First-order
+    states: A Δx = h f at the midpoint."""
 
     name = "ep"
     alpha = 0.5
 
-    def _solve(self) -> StepInfo:
-        s, h, a = self.sys, self.h, self.alpha
-        n, mh = s.n, s.mh
-        qi, vi, ti = self.q, self.v, self.t
-        tf, tm = ti + h, ti + 0.5 * h
-        c = a * h * h
-        Mvi = s.M @ vi
+    def _begin(self) -> None:
+        h = self.h
+        self._tf, self._tm = self.t + h, self.t + 0.5 * h
+        self._c = self.alpha * h * h
+        self._hMv = h * (self.sys.M @ self.v)
 
-        def unpack(x):
-            dq = x[:n]
-            return dq, qi + dq, qi + 0.5 * dq, x[n : n + mh], x[n + mh :]
+    def _start(self) -> Array:
+        return np.concatenate([self.h * self.v, self._c * self.lam, self._c * self.nu])
 
-        def residual(x):
-            dq, qf, qm, mu, nu = unpack(x)
-            gbar = s.discrete_jacobian_values(qi, qf, ti, tf)
-            r1 = s.M @ dq - h * Mvi + c * (s.discrete_gradient(qi, qf)
-                                           - s.applied(qm, dq / h, tm))
-            r1 += s.gmul_T(gbar, mu)
-            parts = [r1, s.constraint(qf, tf)]
-            if s.mn:
-                am = s.nonholonomic_values(qm)
-                r1 += s.amul_T(am, nu)
-                parts.append(s.amul(am, dq))
-            return np.concatenate(parts)
+    def _unpack(self, x):
+        n, mh = self.sys.n, self.sys.mh
+        dq = x[:n]
+        return dq, self.q + dq, self.q + 0.5 * dq, x[n : n + mh], x[n + mh :]
 
-        def jacobian(x):
-            dq, qf, qm, mu, _nu = unpack(x)
-            k = 0.5 * c * s.stiffness_values(qm)
-            jq, jv = s.applied_jacobians(qm, dq / h, tm)
-            d = -c * (0.5 * jq + jv / h)
-            hq, hg = s.hessian_values(qm, tm, mu)
-            gbar = s.discrete_jacobian_values(qi, qf, ti, tf)
-            gf = s.jacobian_values(qf, tf)
-            am = s.nonholonomic_values(qm) if s.mn else np.zeros(0)
-            a31 = am + 0.5 * s.nonholonomic_derivative(qm, dq) if s.mn else am
-            return s.kkt(1.0, k, d, 0.5 * hq, 0.5 * hg, gbar, gf, am, a31)
+    def _residual(self, x):
+        s, h, c = self.sys, self.h, self._c
+        qi = self.q
+        dq, qf, qm, mu, nu = self._unpack(x)
+        gbar = s.discrete_jacobian_values(qi, qf, self.t, self._tf)
+        r1 = s.M @ dq - self._hMv + (self.alpha * h) * (s.A1 @ dq)
+        r1 += c * (s.discrete_gradient(qi, qf) - s.applied(qm, dq / h, self._tm))
+        r1 += s.gmul_T(gbar, mu)
+        parts = [r1, s.constraint(qf, self._tf)]
+        if s.mn:
+            am = s.nonholonomic_values(qm)
+            r1 += s.amul_T(am, nu)
+            parts.append(s.amul(am, dq))
+        return np.concatenate(parts)
 
-        x0 = self._predict(np.concatenate([h * vi, c * self.lam, c * self.nu]))
-        res = newton(residual, jacobian, x0, self._converged, self.lin,
-                     self._reuse_now(), full=self._full)
-        self._reuse_outcome(res)
-        if not res.converged:
-            return StepInfo(False, res.iterations, res.factorizations, res.message)
-        dq, qf, qm, mu, nu = unpack(res.x)
-        vf = vi + (dq / h - vi) / a
-        gbar = s.discrete_jacobian_values(qi, qf, ti, tf)
-        lam, nuv = mu / c, nu / c
-        # work of drivers (constraint forces of prescribed motions) and of applied loads
-        self.work += -float(lam @ s.gmul(gbar, dq)) + float(s.applied(qm, dq / h, tm) @ dq)
-        self.q, self.v, self.t, self.lam, self.nu = qf, vf, tf, lam, nuv
-        self._history(res.x)
-        return StepInfo(True, res.iterations, res.factorizations)
+    def _tangent_weights(self, x):
+        s, h, c = self.sys, self.h, self._c
+        dq, qf, qm, mu, _nu = self._unpack(x)
+        return Tangent(q=qm, v=dq / h, t=self._tm, mu=mu, mass=1.0, first=self.alpha * h,
+                       stiff=0.5 * c, force=c, dq_dx=0.5, dv_dx=np.full(s.n, 1.0 / h),
+                       hess=0.5, gbar=s.discrete_jacobian_values(self.q, qf, self.t, self._tf),
+                       g_rows=s.jacobian_values(qf, self._tf), a_weight=0.5, w=dq)
+
+    def _finish(self, x):
+        s, h, c = self.sys, self.h, self._c
+        dq, qf, qm, mu, nu = self._unpack(x)
+        vi = self.v
+        vf = vi + (dq / h - vi) / self.alpha
+        vf[self.first] = dq[self.first] / h  # the mean rate of the midpoint rule
+        gbar = s.discrete_jacobian_values(self.q, qf, self.t, self._tf)
+        lam = mu / c
+        self._book_work(lam, gbar, dq, s.applied(qm, dq / h, self._tm))
+        self.q, self.v, self.t, self.lam, self.nu = qf, vf, self._tf, lam, nu / c
 
 
 class EnergyPreserving(Midpoint):
@@ -261,67 +371,89 @@ class GeneralizedAlpha(Integrator):
         self.af = r / (r + 1)
         self.gamma = 0.5 + self.af - self.am
         self.beta = 0.25 * (self.gamma + 0.5) ** 2
-        self.qdd = initial_accelerations(system, self.q, self.v, self.t)
+        # first-order states (Jansen, Whiting & Hulbert 2000, weights on the old values)
+        self.am1 = (3 * r - 1) / (2 * (1 + r))
+        self.af1 = r / (1 + r)
+        self.gamma1 = 0.5 + self.af1 - self.am1
+        self.qdd = (self._qdd0 if self._qdd0 is not None
+                    else initial_accelerations(system, self.q, self.v, self.t))
         self.acc = self.qdd.copy()
 
-    def _solve(self) -> StepInfo:
+    def _begin(self) -> None:
+        s, h = self.sys, self.h
+        am, af, g, b = self.am, self.af, self.gamma, self.beta
+        vi, ai, qddi = self.v, self.acc, self.qdd
+        self._tf = self.t + h
+        self._sc = b * h * h * (1 - af) / (1 - am)
+        self._base = h * vi + h * h * (0.5 - b) * ai
+        self._mconst = s.M @ (-self._base + b * h * h * (am * ai - af * qddi) / (1 - am))
+        self._vconst = vi + h * (1 - g) * ai
+        f = self.first
+        g1 = self.gamma1
+        # ẋ_f = k1 Δx + k0: from w_f = (Δx − h(1−γ)w_i)/(γh) and the α-filter of the rates
+        self._k1 = (1 - self.am1) / ((1 - self.af1) * g1 * h)
+        self._k0 = ((1 - self.am1) * (-(1 - g1) * ai[f] / g1) + self.am1 * ai[f]
+                    - self.af1 * qddi[f]) / (1 - self.af1)
+        dv = np.full(s.n, g / (b * h))
+        dv[f] = self._k1
+        self._dv_dx = dv
+
+    def _start(self) -> Array:
+        h = self.h
+        dq = h * self.v + 0.5 * h * h * self.acc
+        dq[self.first] = h * self.v[self.first]
+        return np.concatenate([dq, self._sc * self.lam, self._sc * self.nu])
+
+    def _unpack(self, x):
         s, h = self.sys, self.h
         n, mh = s.n, s.mh
-        am, af, g, b = self.am, self.af, self.gamma, self.beta
-        qi, vi, ti, ai, qddi = self.q, self.v, self.t, self.acc, self.qdd
-        tf = ti + h
-        sc = b * h * h * (1 - af) / (1 - am)
-        base = h * vi + h * h * (0.5 - b) * ai
-        mconst = s.M @ (-base + b * h * h * (am * ai - af * qddi) / (1 - am))
-        vconst = vi + h * (1 - g) * ai
+        dq = x[:n]
+        anew = (dq - self._base) / (self.beta * h * h)
+        vf = self._vconst + h * self.gamma * anew
+        f = self.first
+        vf[f] = self._k1 * dq[f] + self._k0
+        return dq, self.q + dq, vf, anew, x[n : n + mh], x[n + mh :]
 
-        def unpack(x):
-            dq = x[:n]
-            anew = (dq - base) / (b * h * h)
-            return dq, qi + dq, vconst + h * g * anew, anew, x[n : n + mh], x[n + mh :]
+    def _residual(self, x):
+        s, b, h, g, sc = self.sys, self.beta, self.h, self.gamma, self._sc
+        dq, qf, vf, _anew, mu, nu = self._unpack(x)
+        c, gf = s.constraint_and_jacobian(qf, self._tf)
+        rate = np.zeros(s.n)
+        rate[self.first] = vf[self.first]
+        r1 = s.M @ dq + self._mconst + sc * (s.A1 @ rate)
+        r1 += sc * (s.gradient(qf) - s.applied(qf, vf, self._tf))
+        r1 += s.gmul_T(gf, mu)
+        parts = [r1, c]
+        if s.mn:
+            af_ = s.nonholonomic_values(qf)
+            r1 += s.amul_T(af_, nu)
+            parts.append(s.amul(af_, vf) * (b * h / g))
+        return np.concatenate(parts)
 
-        def residual(x):
-            dq, qf, vf, _anew, mu, nu = unpack(x)
-            c, gf = s.constraint_and_jacobian(qf, tf)
-            r1 = s.M @ dq + mconst + sc * (s.gradient(qf) - s.applied(qf, vf, tf))
-            r1 += s.gmul_T(gf, mu)
-            parts = [r1, c]
-            if s.mn:
-                af_ = s.nonholonomic_values(qf)
-                r1 += s.amul_T(af_, nu)
-                parts.append(s.amul(af_, vf) * (b * h / g))
-            return np.concatenate(parts)
+    def _tangent_weights(self, x):
+        s, sc = self.sys, self._sc
+        _dq, qf, vf, _anew, mu, _nu = self._unpack(x)
+        gf = s.jacobian_values(qf, self._tf)
+        return Tangent(q=qf, v=vf, t=self._tf, mu=mu, mass=1.0, first=sc * self._k1,
+                       stiff=sc, force=sc, dq_dx=1.0, dv_dx=self._dv_dx, hess=1.0, gbar=gf,
+                       g_rows=gf, a_weight=self.beta * self.h / self.gamma, w=vf)
 
-        def jacobian(x):
-            _dq, qf, vf, _anew, mu, _nu = unpack(x)
-            k = sc * s.stiffness_values(qf)
-            jq, jv = s.applied_jacobians(qf, vf, tf)
-            d = -sc * (jq + jv * g / (b * h))
-            hq, hg = s.hessian_values(qf, tf, mu)
-            gf = s.jacobian_values(qf, tf)
-            a_ = s.nonholonomic_values(qf) if s.mn else np.zeros(0)
-            a31 = a_ + (b * h / g) * s.nonholonomic_derivative(qf, vf) if s.mn else a_
-            return s.kkt(1.0, k, d, hq, hg, gf, gf, a_, a31)
-
-        x0 = self._predict(np.concatenate([h * vi + 0.5 * h * h * ai, sc * self.lam,
-                                           sc * self.nu]))
-        res = newton(residual, jacobian, x0, self._converged, self.lin,
-                     self._reuse_now(), full=self._full)
-        self._reuse_outcome(res)
-        if not res.converged:
-            return StepInfo(False, res.iterations, res.factorizations, res.message)
-        dq, qf, vf, anew, mu, nu = unpack(res.x)
+    def _finish(self, x):
+        s, h = self.sys, self.h
+        am, af = self.am, self.af
+        dq, qf, vf, anew, mu, nu = self._unpack(x)
+        ai, qddi = self.acc, self.qdd
         qdd = ((1 - am) * anew + am * ai - af * qddi) / (1 - af)
-        lam, nuv = mu / sc, nu / sc
-        qm, vm = qi + 0.5 * dq, 0.5 * (vi + vf)
-        gm = s.jacobian_values(qm, ti + 0.5 * h)
+        f = self.first
+        anew[f] = (dq[f] - h * (1 - self.gamma1) * ai[f]) / (self.gamma1 * h)  # w_f
+        qdd[f] = vf[f]
+        lam, nuv = mu / self._sc, nu / self._sc
+        qm, vm = self.q + 0.5 * dq, 0.5 * (self.v + vf)
+        gm = s.jacobian_values(qm, self.t + 0.5 * h)
         # work booked with midpoint values (the scheme has no exact discrete energy balance)
-        lam_m = 0.5 * (self.lam + lam)
-        self.work += -float(lam_m @ s.gmul(gm, dq)) + float(s.applied(qm, vm, ti + 0.5 * h) @ dq)
-        self.q, self.v, self.t, self.lam, self.nu = qf, vf, tf, lam, nuv
+        self._book_work(0.5 * (self.lam + lam), gm, dq, s.applied(qm, vm, self.t + 0.5 * h))
+        self.q, self.v, self.t, self.lam, self.nu = qf, vf, self._tf, lam, nuv
         self.acc, self.qdd = anew, qdd
-        self._history(res.x)
-        return StepInfo(True, res.iterations, res.factorizations)
 
 
 class EnergyDecaying(GeneralizedAlpha):
@@ -367,7 +499,8 @@ class EnergyDecaying(GeneralizedAlpha):
         if self._fallback is None:
             fb = _Decaying.__new__(_Decaying)
             fb.sys, fb.h, fb.reuse, fb.lin = self.sys, self.h, self.reuse, LinearSolver()
-            fb.scale, fb.work, fb.conservative = self.scale, 0.0, True
+            fb.scale, fb.work, fb.conservative, fb.tol = self.scale, 0.0, True, self.tol
+            fb.first, fb.mech = self.first, self.mech
             self._fallback = fb
         return self._fallback
 
@@ -399,8 +532,7 @@ def project_positions(s: System, q: Array, t: float) -> Array:
         if c.size == 0 or np.abs(c).max() < 1e-14 * max(1.0, np.abs(q).max()):
             return q
         n = s.n
-        ident = np.ones(n)
-        mat = _kkt_identity(s, ident, g)
+        mat = _kkt_identity(s, np.ones(n), g)
         rhs = np.concatenate([q_ref - q, -c, np.zeros(s.mn)])
         msg = lin.factor(mat)
         if msg:
@@ -408,14 +540,13 @@ def project_positions(s: System, q: Array, t: float) -> Array:
         dx = lin.lu.solve(rhs)
         q += dx[:n]
     c = s.constraint(q, t)
+    worst = s.row_owner(int(np.argmax(np.abs(c))))
     raise ValueError(f"initial configuration cannot satisfy the constraints (max |C| = "
-                     f"{np.abs(c).max():.3g}): check joint locations and axes")
+                     f"{np.abs(c).max():.3g}, in {worst!r}): check joint locations and axes")
 
 
 def _kkt_identity(s: System, diag: Array, g: Array):
     """[[diag(w), Gᵀ, 0], [G, 0, 0], [0, 0, I]] in the system's pattern (A rows neutralized)."""
-    import scipy.sparse as sp
-
     n = s.n
     top = sp.diags(diag)
     gm = sp.csr_matrix((g, (s.G_rows, s.G_cols)), shape=(s.mh, n))
@@ -427,8 +558,6 @@ def _kkt_identity(s: System, diag: Array, g: Array):
 
 def project_velocities(s: System, q: Array, v: Array, t: float) -> Array:
     """Closest v (weighted least squares) with G v + ∂C/∂t = 0 and A(q) v = 0."""
-    import scipy.sparse as sp
-
     if s.mh + s.mn == 0:
         return v.copy()
     g = s.jacobian_values(q, t)
@@ -443,7 +572,7 @@ def project_velocities(s: System, q: Array, v: Array, t: float) -> Array:
     # body coordinates keep their given rates as far as the constraints allow; the massless
     # joint scalars (η, s) take whatever rates the constraints imply (tiny weight)
     w = np.ones(s.n)
-    w[list(s.scalar_index.values())] = 1e-8
+    w[s.layout.algebraic] = 1e-8
     mat = sp.bmat([[sp.diags(w), big.T], [big, None]], format="csc")
     lin = LinearSolver()
     msg = lin.factor(mat)
@@ -454,13 +583,14 @@ def project_velocities(s: System, q: Array, v: Array, t: float) -> Array:
 
 
 def initial_accelerations(s: System, q: Array, v: Array, t: float, multipliers: bool = False):
-    """q̈ from [[M, Gᵀ, Aᵀ], [G, 0, 0], [A, 0, 0]] [q̈; λ; ν] = [f − ∇V; −γ; −γ_A]."""
+    """q̈ (and ẋ of the first-order states) from
+    [[M + A, Gᵀ, Aₙᵀ], [G, 0, 0], [Aₙ, 0, 0]] [q̈; λ; ν] = [f − ∇V; −γ; −γ_A]."""
     g = s.jacobian_values(q, t)
-    a = s.nonholonomic_values(q) if s.mn else np.zeros(0)
-    z = np.zeros  # no stiffness, damping or curvature blocks: the matrix is [[M, Gᵀ], [G, 0]]
-    mat = s.kkt(1.0, z(len(s.stiffness_values(q))), z(len(s.applied_jacobians(q, v, t)[0])),
-                z(len(s.quad.hess_rows)), z(sum(len(gr.hess_rows) for gr in s.groups)),
-                g, g, a, a)
+    blocks = {"M": s.M_vals, "A1": s.A1_vals, "GT": g, "G": g}
+    if s.mn:
+        a = s.nonholonomic_values(q)
+        blocks["AT"] = blocks["A"] = a
+    mat = s.kkt(blocks)
     rhs = np.concatenate([s.applied(q, v, t) - s.gradient(q), -s.constraint_curvature(q, v, t),
                           -s.nonholonomic_curvature(q, v) if s.mn else np.zeros(0)])
     lin = LinearSolver()

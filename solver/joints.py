@@ -9,13 +9,14 @@ moment (about the joint point) that the joint applies to the second body.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from solver.bodies import Body, PointMass
-from solver.quadratic import QuadraticBuilder, VecExpr
+from solver.element import Element
+from solver.quadratic import QuadraticBuilder, QuadraticSet, VecExpr
 from solver.timefunctions import TimeFunction, cos_of, sin_of
 
 
@@ -47,8 +48,11 @@ class Layout:
 
 
 @dataclass(eq=False)
-class Joint:
-    """Base of the lower-pair joints between ``body_a`` (k) and ``body_b`` (ℓ)."""
+class Joint(Element):
+    """Base of the lower-pair joints between ``body_a`` (k) and ``body_b`` (ℓ).
+
+    A joint adds its rows to the model's quadratic tensor in :meth:`quadratic_rows`
+    (returning the rows and a dict of data kept for outputs)."""
 
     name: str
     body_a: Body
@@ -56,7 +60,8 @@ class Joint:
     point: ArrayLike = (0.0, 0.0, 0.0)
     axis: ArrayLike | None = None
     frame: ArrayLike | None = None
-    rows: NDArray[np.int64] = field(default=None, init=False, repr=False)
+
+    set_class = QuadraticSet
 
     def __post_init__(self) -> None:
         self.point = np.asarray(self.point, dtype=float)
@@ -84,7 +89,8 @@ class Joint:
     def point_on_b(self, lay: Layout) -> VecExpr:
         return self._points(lay)[1]
 
-    def build(self, qb: QuadraticBuilder, lay: Layout) -> NDArray[np.int64]:
+    def quadratic_rows(self, qb: QuadraticBuilder,
+                       lay: Layout) -> tuple[NDArray[np.int64], dict]:
         raise NotImplementedError
 
 
@@ -103,11 +109,11 @@ def _rotation_rows(qb: QuadraticBuilder, ja, jb, which: tuple[int, ...]) -> NDAr
 class Spherical(Joint):
     """Coincident points, free relative rotation (3 rows)."""
 
-    def build(self, qb, lay):
+    def quadratic_rows(self, qb, lay):
         pa, pb = self._points(lay)
         rows = qb.new_rows(3)
         qb.add_vector(rows, pa - pb)
-        return rows
+        return rows, {}
 
 
 @dataclass(eq=False)
@@ -119,7 +125,7 @@ class Revolute(Joint):
 
     driven: TimeFunction | None = None
 
-    def build(self, qb, lay):
+    def quadratic_rows(self, qb, lay):
         self._need_orientation()
         pa, pb = self._points(lay)
         ja, jb = self._frames(lay)
@@ -130,26 +136,27 @@ class Revolute(Joint):
         if self.driven is not None:  # Eq. (3) with φ prescribed
             qb.add_dot(int(rows[5]), ja[0], jb[0], f=sin_of(self.driven))
             qb.add_dot(int(rows[5]), ja[0], jb[1], f=cos_of(self.driven))
-        self._ja, self._jb = ja, jb
-        return rows
+        return rows, {"frames": (ja, jb)}
 
-    def angle(self, q: NDArray[np.float64]) -> float:
-        """Relative rotation φ (rad, wrapped to (−π, π]) at configuration q."""
-        e1a = self._ja[0].value(q)
-        return float(np.arctan2(-e1a @ self._jb[1].value(q), e1a @ self._jb[0].value(q)))
+    @staticmethod
+    def angle_from(data: dict, q: NDArray[np.float64]) -> float:
+        """Relative rotation φ (rad, wrapped to (−π, π]) at q, from the joint's build data."""
+        ja, jb = data["frames"]
+        e1a = ja[0].value(q)
+        return float(np.arctan2(-e1a @ jb[1].value(q), e1a @ jb[0].value(q)))
 
 
 @dataclass(eq=False)
 class Rigid(Joint):
     """Clamp: no relative motion (6 rows)."""
 
-    def build(self, qb, lay):
+    def quadratic_rows(self, qb, lay):
         self._need_orientation()
         pa, pb = self._points(lay)
         ja, jb = self._frames(lay)
         rows = qb.new_rows(3)
         qb.add_vector(rows, pa - pb)
-        return np.concatenate([rows, _rotation_rows(qb, ja, jb, (0, 1, 2))])
+        return np.concatenate([rows, _rotation_rows(qb, ja, jb, (0, 1, 2))]), {}
 
 
 @dataclass(eq=False)
@@ -158,17 +165,17 @@ class Orientation(Joint):
 
     axes: tuple[int, ...] = (0, 1, 2)
 
-    def build(self, qb, lay):
+    def quadratic_rows(self, qb, lay):
         self._need_orientation()
         ja, jb = self._frames(lay)
-        return _rotation_rows(qb, ja, jb, tuple(self.axes))
+        return _rotation_rows(qb, ja, jb, tuple(self.axes)), {}
 
 
 @dataclass(eq=False)
 class Prismatic(Joint):
     """Relative translation along e3 only, no relative rotation (5 rows)."""
 
-    def build(self, qb, lay):
+    def quadratic_rows(self, qb, lay):
         self._need_orientation()
         pa, pb = self._points(lay)
         ja, jb = self._frames(lay)
@@ -176,14 +183,14 @@ class Prismatic(Joint):
         r = pb - pa
         qb.add_dot(int(rows[0]), r, ja[0])
         qb.add_dot(int(rows[1]), r, ja[1])
-        return np.concatenate([rows, _rotation_rows(qb, ja, jb, (0, 1, 2))])
+        return np.concatenate([rows, _rotation_rows(qb, ja, jb, (0, 1, 2))]), {}
 
 
 @dataclass(eq=False)
 class Planar(Joint):
     """Body b moves in the plane ⟂ e3 of body a and rotates about e3 only (3 rows)."""
 
-    def build(self, qb, lay):
+    def quadratic_rows(self, qb, lay):
         self._need_orientation()
         pa, pb = self._points(lay)
         ja, jb = self._frames(lay)
@@ -191,4 +198,4 @@ class Planar(Joint):
         qb.add_dot(int(rows[0]), pb - pa, ja[2])
         qb.add_dot(int(rows[1]), ja[2], jb[0])
         qb.add_dot(int(rows[2]), ja[2], jb[1])
-        return rows
+        return rows, {}

@@ -1,53 +1,50 @@
-"""The model: a passive declaration of bodies, joints, forces and extra constraints.
+"""The model: a passive declaration of the elements of a multibody system.
 
-Build a :class:`Model`, then hand it to :func:`solver.integrators.simulate` (declare, then solve).
+Build a :class:`Model`, then hand it to :func:`solver.simulation.simulate` (declare, then
+solve). Assembly (:class:`solver.system.System`) reads the model and never writes into it, so
+one model can be assembled any number of times.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from solver.bodies import Body, Scalar
-from solver.forces import ForceElement
-from solver.joints import Joint
+from solver.element import Element
 
 
 @dataclass
 class Model:
-    """Bodies, joints, force elements and extra constraint groups of a multibody system.
+    """The elements of a multibody system — bodies, joints, forces, relations, first-order
+    elements — in the order they were added."""
 
-    ``constraints`` holds holonomic constraint groups that are not quadratic (e.g. the curve
-    sliding joint) and ``nonholonomic`` the velocity constraints A(q)·q̇ = 0 (rolling, arc
-    length). ``scalars`` are extra massless unknowns they own (η, s).
-    """
-
-    bodies: list[Body] = field(default_factory=list)
-    joints: list[Joint] = field(default_factory=list)
-    forces: list[ForceElement] = field(default_factory=list)
-    constraints: list = field(default_factory=list)
-    nonholonomic: list = field(default_factory=list)
-    scalars: list[Scalar] = field(default_factory=list)
+    elements: list[Element] = field(default_factory=list)
 
     def add(self, *items):
-        """Add bodies, joints, force elements, scalars or constraint groups; returns the last."""
-        from solver.constraints import HolonomicGroup, NonholonomicGroup
-        from solver.curve_joints import CurveSliding
-
+        """Add elements (or lists of them); returns the last one added."""
         for it in items:
-            if isinstance(it, Joint):
-                self.joints.append(it)
-            elif isinstance(it, ForceElement):
-                self.forces.append(it)
-            elif isinstance(it, Scalar):
-                self.scalars.append(it)
-            elif isinstance(it, (list, tuple)):
+            if isinstance(it, (list, tuple)):
                 self.add(*it)
-            elif isinstance(it, (HolonomicGroup, CurveSliding)):
-                self.constraints.append(it)
-                self.scalars.extend(s for s in it.scalars() if s not in self.scalars)
-            elif isinstance(it, NonholonomicGroup):
-                self.nonholonomic.append(it)
-                self.scalars.extend(s for s in it.scalars() if s not in self.scalars)
+            elif isinstance(it, Element):
+                self.elements.append(it)
             else:
-                self.bodies.append(it)
+                raise TypeError(f"cannot add a {type(it).__name__} to a model: expected a body, "
+                                "joint, force or other solver element")
         return items[-1] if items else None
+
+    def of_type(self, *types: type) -> list:
+        """The elements that are instances of ``types``, in model order."""
+        return [e for e in self.elements if isinstance(e, types)]
+
+    @property
+    def bodies(self) -> list:
+        """Rigid bodies, point masses and prescribed bodies, in model order."""
+        from solver.bodies import PointMass, PrescribedBody, RigidBody
+
+        return self.of_type(RigidBody, PointMass, PrescribedBody)
+
+    @property
+    def joints(self) -> list:
+        """Lower-pair joints, in model order."""
+        from solver.joints import Joint
+
+        return self.of_type(Joint)

@@ -33,6 +33,7 @@ class NewtonResult:
     factorizations: int
     message: str = ""
     stale_refactored: bool = False  # factors reused from an earlier call failed at once
+    residual: NDArray[np.float64] | None = None  # last residual evaluated (for diagnostics)
 
 
 class LinearSolver:
@@ -77,10 +78,11 @@ def newton(residual: Callable[[NDArray], NDArray], jacobian: Callable[[NDArray],
     for it in range(1, NEWTON_MAXITER + 1):
         r = residual(x)
         if not np.all(np.isfinite(r)):
-            return NewtonResult(x, False, it, nfact, "non-finite residual (Newton diverged)")
+            return NewtonResult(x, False, it, nfact, "non-finite residual (Newton diverged)",
+                                residual=r)
         dx = solver.lu.solve(-r)
         if not np.all(np.isfinite(dx)):
-            return NewtonResult(x, False, it, nfact, "non-finite Newton update")
+            return NewtonResult(x, False, it, nfact, "non-finite Newton update", residual=r)
         x += dx
         size = float(np.abs(dx).max())
         rate = size / prev if np.isfinite(prev) and prev > 0 else 0.0
@@ -100,7 +102,8 @@ def newton(residual: Callable[[NDArray], NDArray], jacobian: Callable[[NDArray],
             stale_bad = stale_bad or (started_stale and not fresh and it <= 2)
             if fresh and rate >= 1.0 and it > 3:
                 return NewtonResult(x, False, it, nfact,
-                                    f"Newton diverged (contraction rate {rate:.2f} ≥ 1)")
+                                    f"Newton diverged (contraction rate {rate:.2f} ≥ 1)",
+                                    residual=r)
             fresh = True
             msg = solver.factor(jacobian(x))
             nfact += 1
@@ -110,4 +113,4 @@ def newton(residual: Callable[[NDArray], NDArray], jacobian: Callable[[NDArray],
             continue
         prev = size
     return NewtonResult(x, False, NEWTON_MAXITER, nfact,
-                        f"Newton did not converge in {NEWTON_MAXITER} iterations")
+                        f"Newton did not converge in {NEWTON_MAXITER} iterations", residual=r)

@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
+from solver.element import ElementSet
 from solver.timefunctions import TimeFunction, constant
 
 
@@ -179,3 +180,51 @@ class QuadraticConstraints:
                                minlength=self.m)
             out += np.bincount(self.c_row, c2, minlength=self.m)
         return out
+
+
+class QuadraticSet(ElementSet):
+    """All elements whose rows are at most quadratic — rigid-body orthonormality, prescribed
+    motions and every lower-pair joint — as one :class:`QuadraticConstraints` tensor.
+
+    Members implement ``quadratic_rows(builder, layout) -> (rows, data)``; ``data`` (a dict)
+    is kept per member for outputs (e.g. a revolute's joint frames). Bodies' rows come first
+    (``quadratic_priority`` 0), then the joints', each in model order.
+    """
+
+    def __init__(self, elements: list, system) -> None:
+        ordered = sorted(elements, key=lambda e: getattr(e, "quadratic_priority", 1))
+        super().__init__(ordered, system)
+        qb = QuadraticBuilder()
+        self.rows: dict = {}
+        self.data: dict = {}
+        for e in ordered:
+            self.rows[e], self.data[e] = e.quadratic_rows(qb, system)
+        self.quad = quad = qb.build()
+        self.n_holonomic = quad.m
+        self.hol_rows, self.hol_cols = quad.jac_rows, quad.jac_cols
+        self.hess_rows, self.hess_cols = quad.hess_rows, quad.hess_cols
+        self.time_dependent = self.nonconservative = quad.time_dependent
+        self._owner = np.zeros(quad.m, dtype=np.int64)
+        for k, e in enumerate(ordered):
+            self._owner[self.rows[e]] = k
+
+    def row_owner(self, row: int, holonomic: bool = True) -> str:
+        return self.elements[int(self._owner[row])].name
+
+    def constraint(self, q, t):
+        return self.quad.value(q, t), self.quad.jacobian_values(q, t)
+
+    def discrete_jacobian(self, qi, qf, ti, tf):
+        # the midpoint Jacobian of a quadratic is its exact discrete derivative
+        return self.quad.jacobian_values(0.5 * (qi + qf), 0.5 * (ti + tf))
+
+    def constraint_hessian(self, q, t, lam):
+        return self.quad.hessian_values(lam, t)
+
+    def constraint_rate(self, q, t):
+        if not self.time_dependent:
+            return np.zeros(self.n_holonomic)
+        return self.quad.value(q, t, order=1)
+
+    def constraint_curvature(self, q, v, t):
+        return self.quad.quadratic_rate_term(q, v, t)

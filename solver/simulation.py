@@ -11,7 +11,7 @@ import xarray as xr
 
 from solver.bodies import PointMass, PrescribedBody
 from solver.integrators import Integrator, make_integrator
-from solver.joints import Revolute
+from solver.joints import Joint, Revolute
 from solver.rotations import wiener_milenkovic_from_matrix
 from solver.system import System
 
@@ -116,8 +116,8 @@ class _Recorder:
         self.s = s
         self.bodies = [b for b in s.bodies if not (isinstance(b, PrescribedBody)
                                                    and b.name == "ground")]
-        self.revolutes = [j for j in s.model.joints if isinstance(j, Revolute)]
-        self.joints = list(s.model.joints) if reactions else []
+        self.revolutes = s.model.of_type(Revolute)
+        self.joints = s.model.of_type(Joint) if reactions else []
         self.t, self.x, self.r, self.v, self.w = [], [], [], [], []
         self.phi, self.f, self.m, self.sc = [], [], [], []
         self._phi_prev = None
@@ -146,7 +146,7 @@ class _Recorder:
         self.r.append(rs)
         self.v.append(vs)
         self.w.append(ws)
-        phi = np.array([j.angle(q) for j in self.revolutes])
+        phi = np.array([s.joint_angle(j, q) for j in self.revolutes])
         if self._phi_prev is not None:  # unwrap against the previous record
             phi = self._phi_prev + np.angle(np.exp(1j * (phi - self._phi_prev)))
         self._phi_prev = phi

@@ -1,123 +1,91 @@
-"""Assembly of a :class:`~solver.model.Model` into unknowns, a mass matrix and constraint rows.
+"""Assembly of a :class:`~solver.model.Model` into unknowns, element sets and a sparse pattern.
 
-Unknown numbering: rigid and prescribed bodies carry 12 coordinates (x, d1, d2, d3), point masses
-3, joint scalars 1. Holonomic rows are ordered: quadratic rows (orthonormality, prescribed
-motion, lower pairs), then the non-quadratic groups; nonholonomic rows follow. The sparse
-pattern of the Newton (KKT) matrix is built once; each iteration only scatters values into it
-with one ``np.bincount``.
+The elements declare their unknowns (:mod:`solver.state`); the layout numbers them. The
+elements are grouped into vectorized sets (:mod:`solver.element`), each resolving its indices
+once. Holonomic rows are ordered: the quadratic tensor (orthonormality, prescribed motion,
+lower pairs) first, then the other holonomic sets in model order; nonholonomic rows follow.
+
+The Newton (KKT) matrix is assembled from a list of named blocks — mass, first-order mass,
+stiffness, force Jacobians, constraint Hessian, Gᵀ, G, Aᵀ, A — whose patterns hold the
+structural non-zeros of the elements only. The pattern is built once; each iteration scatters
+the block values with one ``np.bincount``. The model is read, never written.
 """
 
 from __future__ import annotations
-
-from functools import lru_cache
 
 import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
 
-from solver.bodies import PointMass, PrescribedBody, RigidBody
-from solver.quadratic import QuadraticBuilder, VecExpr
-from solver.timefunctions import TimeFunction
+from solver.bodies import PointMass, PrescribedBody, RigidBody, Scalar
+from solver.element import ElementSet, group_elements
+from solver.quadratic import QuadraticSet, VecExpr
+from solver.state import Layout
 
 Array = NDArray[np.float64]
+BODY_TYPES = (RigidBody, PointMass, PrescribedBody)
+# Blocks of the Newton matrix, in pattern order.
+BLOCKS = ("M", "A1", "K", "Dq", "Dv", "H", "GT", "G", "AT", "A")
 
 
 class System:
     """The assembled model: what the integrators need, vectorized."""
 
     def __init__(self, model) -> None:
+        elements = list(model.elements)
         self.model = model
-        self.bodies = list(model.bodies)
+        self.bodies = [e for e in elements if isinstance(e, BODY_TYPES)]
         names = [b.name for b in self.bodies]
         dup = {n for n in names if names.count(n) > 1}
         if dup:
             raise ValueError(f"body names must be unique; repeated: {', '.join(sorted(dup))}")
-        self.offset: dict = {}
-        n = 0
-        for b in self.bodies:
-            self.offset[b] = n
-            n += 3 if isinstance(b, PointMass) else 12
-        self.scalar_index: dict = {}
-        self._block_end = n  # body coordinates come first, in 3-blocks
-        for s in model.scalars:
-            self.scalar_index[s] = n
-            n += 1
-        self.n = n
-        self.q0_raw = self._initial_q()
-        self.M = self._mass_matrix()
+        self.layout = lay = Layout([blk for e in elements for blk in e.states()])
+        self.n = lay.n
+        self.offset = lay.offset
+        self.scalar_index = {b.owner: lay.offset[b.owner] for b in lay.blocks
+                             if isinstance(b.owner, Scalar)}
+        self._block_end = lay.n_second_coordinates
+        self.q0_raw, self._v_declared = lay.initial()
+        self.M, self.A1 = lay.mass_matrices()
 
-        qb = QuadraticBuilder()
-        self.body_rows: dict = {}
-        for b in self.bodies:
-            o = self.offset[b]
-            if isinstance(b, RigidBody):
-                rows = qb.new_rows(6)
-                d = [VecExpr([(1.0, o + 3 + 3 * a)]) for a in range(3)]
-                for r, (a, c) in zip(rows, [(0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (2, 0)],
-                                     strict=True):
-                    qb.add_dot(int(r), d[a], d[c])
-                    if a == c:
-                        qb.add_constant(int(r), -1.0)
-                self.body_rows[b] = rows
-            elif isinstance(b, PrescribedBody):
-                rows = qb.new_rows(12)
-                moving = self._moves(b)
-                comps = _prescribed_components(b) if moving else None
-                for k in range(12):
-                    qb.add_linear(int(rows[k]), o + k, 1.0)
-                    if moving:
-                        qb.add_constant(int(rows[k]), -1.0, comps[k])
-                    elif self.q0_raw[o + k] != 0.0:
-                        qb.add_constant(int(rows[k]), -float(self.q0_raw[o + k]))
-                self.body_rows[b] = rows
-        self.joint_rows = {}
-        for j in model.joints:
-            self.joint_rows[j] = j.build(qb, self)
-        self.quad = qb.build()
-        self.mq = self.quad.m
-
-        from solver.curve_joints import batch_curve_joints
-
-        self.groups = batch_curve_joints(list(model.constraints))
-        self.group_rows = []
-        m = self.mq
-        for g in self.groups:
-            g.setup(self)
-            self.group_rows.append(np.arange(m, m + g.m))
-            m += g.m
+        sets: list[ElementSet] = []
+        for cls, members in group_elements(elements):
+            st = cls(members, self)
+            st.initialize(self.q0_raw)
+            sets.append(st)
+        self.sets = sets
+        quad = [s for s in sets if isinstance(s, QuadraticSet)]
+        self.quad_set = quad[0] if quad else None
+        self.quad = self.quad_set.quad if quad else None
+        self.hol_sets = quad + [s for s in sets if s.n_holonomic and s not in quad]
+        self.nh_sets = [s for s in sets if s.n_nonholonomic]
+        self.potential_sets = [s for s in sets if len(s.grad_idx)]
+        self.force_sets = [s for s in sets if len(s.force_idx)]
+        m = 0
+        self.hol_offset: dict = {}
+        for s in self.hol_sets:
+            self.hol_offset[s] = m
+            m += s.n_holonomic
         self.mh = m
-        from solver.curve_joints import batch_nonholonomic
-
-        self.nh_groups = batch_nonholonomic(list(model.nonholonomic))
-        self.nh_rows = []
-        for g in self.nh_groups:
-            g.setup(self)
-            self.nh_rows.append(np.arange(m, m + g.m))
-            m += g.m
+        self.nh_offset: dict = {}
+        for s in self.nh_sets:
+            self.nh_offset[s] = m
+            m += s.n_nonholonomic
         self.mn = m - self.mh
         self.m = m
-
-        self.forces = list(model.forces)
-        for f in self.forces:
-            f.setup(self)
-        self.potential_elements = [f for f in self.forces if f.has_potential]
-        self.force_elements = [f for f in self.forces if f.has_force]
-        self.time_dependent = self.quad.time_dependent
-        self.has_nonconservative = bool(self.force_elements) or self.time_dependent or any(
-            self._moves(b) for b in self.bodies if isinstance(b, PrescribedBody))
+        self.time_dependent = any(s.time_dependent for s in sets)
+        self.has_nonconservative = any(s.nonconservative or s.time_dependent for s in sets)
         self._build_pattern()
 
     # ------------------------------------------------------------------ layout helpers
-    def _moves(self, b: PrescribedBody) -> bool:
-        x0, r0, v0, w0, *_ = b.motion(0.0)
-        x1, r1, *_ = b.motion(1.2345)
-        return bool(np.any(v0) or np.any(w0) or np.abs(x1 - x0).max() > 0
-                    or np.abs(r1 - r0).max() > 0)
+    @property
+    def first_order(self) -> NDArray[np.int64]:
+        """Indices of the first-order states."""
+        return self.layout.first
 
     def _pose0(self, b):
         if isinstance(b, PrescribedBody):
-            x, r, *_ = b.motion(0.0)
-            return np.asarray(x, float), np.asarray(r, float)
+            return b.pose(0.0)
         if isinstance(b, PointMass):
             return b.position, np.eye(3)
         return b.position, b.orientation
@@ -148,101 +116,90 @@ class System:
         o = self.offset[body]
         return VecExpr([(float(c), o + 3 + 3 * a) for a, c in enumerate(local) if c != 0.0])
 
-    def _initial_q(self) -> Array:
-        q = np.zeros(self.n)
-        for b in self.bodies:
-            o = self.offset[b]
-            x, r = self._pose0(b)
-            q[o : o + 3] = x
-            if not isinstance(b, PointMass):
-                q[o + 3 : o + 12] = r.T.ravel()  # d_α = column α of R
-        for s, i in self.scalar_index.items():
-            q[i] = s.initial
-        return q
-
     def initial_velocity_guess(self) -> Array:
-        v = np.zeros(self.n)
-        for b in self.bodies:
-            o = self.offset[b]
-            if isinstance(b, PrescribedBody):
-                _x, r, vel, w, *_ = b.motion(0.0)
-                v[o : o + 3] = vel
-                v[o + 3 : o + 12] = np.cross(w, np.asarray(r).T).ravel()
-            elif isinstance(b, PointMass):
-                v[o : o + 3] = b.velocity
-            else:
-                v[o : o + 3] = b.velocity
-                v[o + 3 : o + 12] = np.cross(b.angular_velocity, b.orientation.T).ravel()
-        for s, i in self.scalar_index.items():
-            v[i] = s.rate
-        return v
+        """Declared initial rates (velocities, director rates, scalar and state rates)."""
+        return self._v_declared.copy()
 
-    def _mass_matrix(self) -> sp.csr_matrix:
-        rows, cols, vals = [], [], []
-        for b in self.bodies:
-            o = self.offset[b]
-            for k in range(3):
-                rows.append(o + k)
-                cols.append(o + k)
-                vals.append(b.mass)
-            if not isinstance(b, PointMass):
-                e = b.director_inertia
-                for a in range(3):
-                    for c in range(3):
-                        if e[a, c] != 0.0:
-                            for k in range(3):
-                                rows.append(o + 3 + 3 * a + k)
-                                cols.append(o + 3 + 3 * c + k)
-                                vals.append(e[a, c])
-        return sp.csr_matrix((vals, (rows, cols)), shape=(self.n, self.n))
+    @property
+    def joint_rows(self) -> dict:
+        """Lower-pair joint (or body) → its global holonomic rows."""
+        if self.quad_set is None:
+            return {}
+        o = self.hol_offset[self.quad_set]
+        return {e: rows + o for e, rows in self.quad_set.rows.items()}
+
+    def unknown_owner(self, i: int) -> str:
+        """Description of unknown ``i``: its owner's name and the coordinate within it."""
+        for b in self.layout.blocks:
+            o = self.offset[b.owner]
+            if o <= i < o + b.size:
+                return f"{getattr(b.owner, 'name', '?')!r} (coordinate {i - o})"
+        return "?"
+
+    def row_owner(self, row: int) -> str:
+        """Name of the element that owns global constraint row ``row``."""
+        for s, o in self.hol_offset.items():
+            if o <= row < o + s.n_holonomic:
+                return s.row_owner(row - o, True)
+        for s, o in self.nh_offset.items():
+            if o <= row < o + s.n_nonholonomic:
+                return s.row_owner(row - o, False)
+        return "?"
+
+    @property
+    def relation_names(self) -> list[str]:
+        """One name per nonholonomic row."""
+        return [s.row_owner(r, False) for s in self.nh_sets for r in range(s.n_nonholonomic)]
 
     # ------------------------------------------------------------------ sparse pattern
     def _build_pattern(self) -> None:
         n = self.n
-        Mc = self.M.tocoo()
-        blocks = [(Mc.row, Mc.col)]
-        kr = [f.hess_rows for f in self.potential_elements]
-        kc = [f.hess_cols for f in self.potential_elements]
-        blocks.append((_cat(kr), _cat(kc)))
-        dr = [f.jac_rows for f in self.force_elements]
-        dc = [f.jac_cols for f in self.force_elements]
-        blocks.append((_cat(dr), _cat(dc)))
-        blocks.append((self.quad.hess_rows, self.quad.hess_cols))
-        blocks.append((_cat([g.hess_rows for g in self.groups]),
-                       _cat([g.hess_cols for g in self.groups])))
-        # holonomic Jacobian: quadratic rows then groups
-        g_rows = [self.quad.jac_rows] + [
-            np.repeat(rows, g.cols.shape[1]) for g, rows in zip(self.groups, self.group_rows,
-                                                                 strict=True)]
-        g_cols = [self.quad.jac_cols] + [g.cols.ravel() for g in self.groups]
-        self.G_rows, self.G_cols = _cat(g_rows), _cat(g_cols)
-        blocks.append((self.G_cols, n + self.G_rows))  # Gᵀ in the dynamic rows
-        blocks.append((n + self.G_rows, self.G_cols))  # G in the constraint rows
-        a_rows = [np.repeat(rows, g.cols.shape[1]) for g, rows in zip(self.nh_groups, self.nh_rows,
-                                                                     strict=True)]
-        a_cols = [g.cols.ravel() for g in self.nh_groups]
-        self.A_rows, self.A_cols = _cat(a_rows), _cat(a_cols)
-        blocks.append((self.A_cols, n + self.A_rows))
-        blocks.append((n + self.A_rows, self.A_cols))
-        self._block_sizes = [len(r) for r, _ in blocks]
-        rows = _cat([r for r, _ in blocks])
-        cols = _cat([c for _, c in blocks])
+        cat = _cat
+        self.G_rows = cat([s.hol_rows + self.hol_offset[s] for s in self.hol_sets])
+        self.G_cols = cat([s.hol_cols for s in self.hol_sets])
+        self.A_rows = cat([s.nh_rows + self.nh_offset[s] for s in self.nh_sets])
+        self.A_cols = cat([s.nh_cols for s in self.nh_sets])
+        self._grad_idx = cat([s.grad_idx for s in self.potential_sets])
+        self._force_idx = cat([s.force_idx for s in self.force_sets])
+        mc, ac = self.M.tocoo(), self.A1.tocoo()
+        self.M_vals, self.A1_vals = mc.data, ac.data
+        self.Dv_cols = cat([s.fv_cols for s in self.sets])
+        pattern = {
+            "M": (mc.row, mc.col),
+            "A1": (ac.row, ac.col),
+            "K": (cat([s.stiff_rows for s in self.sets]), cat([s.stiff_cols for s in self.sets])),
+            "Dq": (cat([s.fq_rows for s in self.sets]), cat([s.fq_cols for s in self.sets])),
+            "Dv": (cat([s.fv_rows for s in self.sets]), self.Dv_cols),
+            "H": (cat([s.hess_rows for s in self.hol_sets]),
+                  cat([s.hess_cols for s in self.hol_sets])),
+            "GT": (self.G_cols, n + self.G_rows),
+            "G": (n + self.G_rows, self.G_cols),
+            "AT": (self.A_cols, n + self.A_rows),
+            "A": (n + self.A_rows, self.A_cols),
+        }
+        self.block_sizes = {k: len(r) for k, (r, _) in pattern.items()}
+        rows = cat([pattern[k][0] for k in BLOCKS])
+        cols = cat([pattern[k][1] for k in BLOCKS])
         N = n + self.m
         key = cols * N + rows  # column-major order for CSC
         uniq, inv = np.unique(key, return_inverse=True)
-        self._scatter = inv
+        bounds = np.cumsum([0] + [self.block_sizes[k] for k in BLOCKS])
+        self._scatter_of = {k: inv[bounds[i] : bounds[i + 1]] for i, k in enumerate(BLOCKS)}
+        self._scatter_cache: dict = {}
         self._nnz = len(uniq)
         self._indices = (uniq % N).astype(np.int32)
-        ucols = uniq // N
-        self._indptr = np.searchsorted(ucols, np.arange(N + 1)).astype(np.int32)
+        self._indptr = np.searchsorted(uniq // N, np.arange(N + 1)).astype(np.int32)
         self.N = N
-        self.M_vals = Mc.data
 
-    def kkt(self, cM: float, K: Array, D: Array, H: Array, HG: Array,
-            GT: Array, G: Array, AT: Array, A: Array) -> sp.csc_matrix:
-        """Assemble the Newton matrix from block values in pattern order."""
-        data = np.concatenate([cM * self.M_vals, K, D, H, HG, GT, G, AT, A])
-        vals = np.bincount(self._scatter, data, minlength=self._nnz).astype(float)
+    def kkt(self, blocks: dict[str, Array]) -> sp.csc_matrix:
+        """The Newton matrix from block values (pattern order of each named block; a block
+        left out is zero)."""
+        names = tuple(k for k in BLOCKS if k in blocks and self.block_sizes[k])
+        scatter = self._scatter_cache.get(names)
+        if scatter is None:
+            scatter = self._scatter_cache[names] = _cat([self._scatter_of[k] for k in names])
+        data = np.concatenate([blocks[k] for k in names]) if names else np.zeros(0)
+        vals = np.bincount(scatter, data, minlength=self._nnz).astype(float)
         return sp.csc_matrix((vals, self._indices, self._indptr), shape=(self.N, self.N))
 
     # ------------------------------------------------------------------ physics kernels
@@ -250,98 +207,66 @@ class System:
         return 0.5 * float(v @ (self.M @ v))
 
     def potential(self, q: Array) -> float:
-        return float(sum(f.potential(q) for f in self.potential_elements))
+        return float(sum(s.potential(q) for s in self.potential_sets))
+
+    def _gather(self, idx: NDArray[np.int64], parts: list[Array]) -> Array:
+        if not len(idx):
+            return np.zeros(self.n)
+        return np.bincount(idx, np.concatenate(parts), minlength=self.n)
 
     def gradient(self, q: Array) -> Array:
-        g = np.zeros(self.n)
-        for f in self.potential_elements:
-            i, val = f.gradient(q)
-            np.add.at(g, i, val)
-        return g
+        return self._gather(self._grad_idx, [s.gradient(q) for s in self.potential_sets])
 
     def discrete_gradient(self, qi: Array, qf: Array) -> Array:
-        g = np.zeros(self.n)
-        for f in self.potential_elements:
-            i, val = f.discrete_gradient(qi, qf)
-            np.add.at(g, i, val)
-        return g
+        return self._gather(self._grad_idx,
+                            [s.discrete_gradient(qi, qf) for s in self.potential_sets])
 
     def stiffness_values(self, q: Array) -> Array:
-        return _cat([f.hessian(q) for f in self.potential_elements], float)
+        return _cat([s.stiffness(q) for s in self.sets], float)
 
     def applied(self, q: Array, v: Array, t: float) -> Array:
-        f = np.zeros(self.n)
-        for e in self.force_elements:
-            i, val = e.generalized_force(q, v, t)
-            np.add.at(f, i, val)
-        return f
+        """Generalized forces of dampers, loads and first-order right-hand sides."""
+        return self._gather(self._force_idx, [s.force(q, v, t) for s in self.force_sets])
 
     def applied_jacobians(self, q: Array, v: Array, t: float) -> tuple[Array, Array]:
+        """(∂f/∂q values in the Dq block, ∂f/∂v values in the Dv block)."""
         jq, jv = [], []
-        for e in self.force_elements:
-            a, b = e.force_jacobians(q, v, t)
-            jq.append(a)
-            jv.append(b)
+        for s in self.sets:
+            if len(s.fq_rows) or len(s.fv_rows):
+                a, b = s.force_jacobians(q, v, t)
+                jq.append(a)
+                jv.append(b)
         return _cat(jq, float), _cat(jv, float)
 
     def constraint(self, q: Array, t: float) -> Array:
         """All holonomic rows C(q, t) (length mh)."""
-        out = [self.quad.value(q, t)]
-        for g in self.groups:
-            out.append(g.evaluate(q)[0])
-        return np.concatenate(out)
+        return _cat([s.constraint(q, t)[0] for s in self.hol_sets], float)
 
     def jacobian_values(self, q: Array, t: float) -> Array:
-        out = [self.quad.jacobian_values(q, t)]
-        for g in self.groups:
-            out.append(g.evaluate(q)[1].ravel())
-        return np.concatenate(out)
+        return _cat([s.constraint(q, t)[1] for s in self.hol_sets], float)
 
     def constraint_and_jacobian(self, q: Array, t: float) -> tuple[Array, Array]:
-        c = [self.quad.value(q, t)]
-        j = [self.quad.jacobian_values(q, t)]
-        for g in self.groups:
-            cv, gv = g.evaluate(q)
-            c.append(cv)
-            j.append(gv.ravel())
-        return np.concatenate(c), np.concatenate(j)
+        out = [s.constraint(q, t) for s in self.hol_sets]
+        return _cat([c for c, _ in out], float), _cat([g for _, g in out], float)
 
     def discrete_jacobian_values(self, qi: Array, qf: Array, ti: float, tf: float) -> Array:
-        """Rows Ḡ with Ḡ·(q_f − q_i) = C(q_f) − C(q_i) for scleronomic rows (midpoint rule for
-        the quadratic rows, Gonzalez's correction for the others)."""
-        qm = 0.5 * (qi + qf)
-        out = [self.quad.jacobian_values(qm, 0.5 * (ti + tf))]
-        for g in self.groups:
-            if hasattr(g, "discrete_jacobian"):
-                out.append(g.discrete_jacobian(qi, qf).ravel())
-                continue
-            ci, _ = g.evaluate(qi)
-            cf, _ = g.evaluate(qf)
-            _, gm = g.evaluate(qm)
-            dq = qf[g.cols] - qi[g.cols]
-            d2 = np.einsum("ij,ij->i", dq, dq)
-            corr = (cf - ci - np.einsum("ij,ij->i", gm, dq)) / np.where(d2 > 1e-28, d2, 1.0)
-            gm = gm + np.where(d2 > 1e-28, corr, 0.0)[:, None] * dq
-            out.append(gm.ravel())
-        return np.concatenate(out)
+        """Rows Ḡ with Ḡ·(q_f − q_i) = C(q_f) − C(q_i) for scleronomic rows."""
+        return _cat([s.discrete_jacobian(qi, qf, ti, tf) for s in self.hol_sets], float)
 
-    def hessian_values(self, q: Array, t: float, lam: Array) -> tuple[Array, Array]:
-        hq = self.quad.hessian_values(lam[: self.mq], t)
-        hg = [g.hessian(q, lam[r]) for g, r in zip(self.groups, self.group_rows, strict=True)]
-        return hq, _cat(hg, float)
+    def hessian_values(self, q: Array, t: float, lam: Array) -> Array:
+        """Σ_r λ_r ∂²C_r/∂q² in the H block."""
+        return _cat([s.constraint_hessian(q, t, lam[o : o + s.n_holonomic])
+                     for s, o in self.hol_offset.items()], float)
 
     def nonholonomic_values(self, q: Array) -> Array:
-        return _cat([g.matrix(q).ravel() for g in self.nh_groups], float)
+        return _cat([s.nh_matrix(q) for s in self.nh_sets], float)
 
     def nonholonomic_derivative(self, q: Array, dq: Array) -> Array:
         """Values of ∂(A(q)·dq)/∂q in the A pattern."""
-        return _cat([g.derivative(q, dq).ravel() for g in self.nh_groups], float)
+        return _cat([s.nh_derivative(q, dq) for s in self.nh_sets], float)
 
     def nonholonomic_residual(self, q: Array, dq: Array) -> Array:
-        out = []
-        for g in self.nh_groups:
-            out.append(np.einsum("ij,ij->i", g.matrix(q), dq[g.cols]))
-        return _cat(out, float)
+        return self.amul(self.nonholonomic_values(q), dq)
 
     def gmul_T(self, vals: Array, lam: Array) -> Array:
         """Gᵀλ for Jacobian values in pattern order."""
@@ -360,29 +285,19 @@ class System:
 
     def constraint_rate(self, q: Array, t: float) -> Array:
         """∂C/∂t at fixed q (prescribed motions, driven joints)."""
-        out = np.zeros(self.mh)
-        if self.time_dependent:
-            out[: self.mq] = self.quad.value(q, t, order=1)
-        return out
+        return _cat([s.constraint_rate(q, t) for s in self.hol_sets], float)
 
     def constraint_curvature(self, q: Array, v: Array, t: float) -> Array:
         """C̈ − G q̈ along a motion through (q, v): the acceleration-level right-hand side."""
-        out = np.zeros(self.mh)
-        out[: self.mq] = self.quad.quadratic_rate_term(q, v, t)
-        eps = 1e-6 / max(1e-12, float(np.abs(v).max()))
-        for g, rows in zip(self.groups, self.group_rows, strict=True):
-            _, gp = g.evaluate(q + eps * v)
-            _, gm = g.evaluate(q - eps * v)
-            out[rows] = np.einsum("ij,ij->i", (gp - gm) / (2 * eps), v[g.cols])
-        return out
+        return _cat([s.constraint_curvature(q, v, t) for s in self.hol_sets], float)
 
     def nonholonomic_curvature(self, q: Array, v: Array) -> Array:
-        eps = 1e-6 / max(1e-12, float(np.abs(v).max()))
-        out = []
-        for g in self.nh_groups:
-            da = (g.matrix(q + eps * v) - g.matrix(q - eps * v)) / (2 * eps)
-            out.append(np.einsum("ij,ij->i", da, v[g.cols]))
-        return _cat(out, float)
+        return _cat([s.nh_curvature(q, v) for s in self.nh_sets], float)
+
+    def accept(self, q: Array) -> None:
+        """Tell every set that a step converged at q."""
+        for s in self.sets:
+            s.accept(q)
 
     # ------------------------------------------------------------------ outputs
     def angular_momentum(self, q: Array, v: Array) -> Array:
@@ -405,12 +320,17 @@ class System:
         dd = v[o + 3 : o + 12].reshape(3, 3)
         return 0.5 * np.cross(d, dd).sum(axis=0)
 
+    def joint_angle(self, joint, q: Array) -> float:
+        """Relative rotation φ of a revolute joint (rad, wrapped to (−π, π])."""
+        return joint.angle_from(self.quad_set.data[joint], q)
+
     def reaction(self, joint, q: Array, lam: Array, t: float) -> tuple[Array, Array]:
         """Force (N) and moment about the joint point (N·m) the joint applies to body_b."""
-        rows = self.joint_rows[joint]
-        gv = self.quad.jacobian_values(q, t)
-        mask = np.isin(self.quad.jac_rows, rows)
-        f = -np.bincount(self.quad.jac_cols[mask], gv[mask] * lam[self.quad.jac_rows[mask]],
+        rows = self.quad_set.rows[joint]
+        quad = self.quad
+        gv = quad.jacobian_values(q, t)
+        mask = np.isin(quad.jac_rows, rows)
+        f = -np.bincount(quad.jac_cols[mask], gv[mask] * lam[quad.jac_rows[mask]],
                          minlength=self.n)
         b = joint.body_b
         o = self.offset[b]
@@ -427,22 +347,3 @@ class System:
 def _cat(arrs, dtype=np.int64):
     arrs = [np.asarray(a) for a in arrs if len(a)]
     return np.concatenate(arrs).astype(dtype) if arrs else np.zeros(0, dtype=dtype)
-
-
-def _prescribed_components(body: PrescribedBody) -> list[TimeFunction]:
-    """Coordinates (x, d1, d2, d3) of a prescribed body as time functions with derivatives."""
-
-    @lru_cache(maxsize=4)
-    def state(t: float):
-        x, r, v, w, a, al = (np.asarray(z, dtype=float) for z in body.motion(t))
-        d = r.T  # rows are directors
-        dd = np.cross(w, d)
-        ddd = np.cross(al, d) + np.cross(w, dd)
-        return (np.concatenate([x, d.ravel()]), np.concatenate([v, dd.ravel()]),
-                np.concatenate([a, ddd.ravel()]))
-
-    def comp(k: int) -> TimeFunction:
-        return TimeFunction(lambda t: state(t)[0][k], lambda t: state(t)[1][k],
-                            lambda t: state(t)[2][k])
-
-    return [comp(k) for k in range(12)]

@@ -243,7 +243,7 @@ def test_arc_length_row_is_parametric_speed():
     the cycloid's closed form."""
     model, j = _cycloid_case(False)
     s = System(model)
-    ie, i_s = s.scalar_index[j.eta], s.scalar_index[model.nonholonomic[0].s]
+    ie, i_s = s.scalar_index[j.eta], s.scalar_index[model.of_type(ArcLength)[0].s]
     for eta in (0.2, 0.5, 0.77):
         q = s.q0_raw.copy()
         q[ie] = eta

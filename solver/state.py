@@ -1,0 +1,139 @@
+"""The state registry: the unknowns of a model, declared by its elements as typed blocks.
+
+Three kinds of unknowns, each integrated consistently by every scheme:
+
+``SECOND``
+    Coordinates of second-order dynamics with a constant mass matrix: rigid-body and beam-node
+    positions and directors, point masses. Their rates are velocities, M q̈ = forces.
+``FIRST``
+    First-order states with their own constant "mass" matrix A: A ẋ = f(q, v, x, t)
+    (aerodynamic and inflow states, lags). They carry no kinetic energy.
+``ALGEBRAIC``
+    Massless scalars fixed by constraints (the curve parameter η, the arc length s).
+
+An element declares its blocks with :class:`StateBlock`; :class:`Layout` numbers them: second-
+order blocks first (in declaration order, so body coordinates form consecutive 3-vectors),
+then algebraic scalars, then first-order states. Nothing is written into the declarations.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+from numpy.typing import NDArray
+
+Array = NDArray[np.float64]
+SECOND, ALGEBRAIC, FIRST = "second", "algebraic", "first"
+KINDS = (SECOND, ALGEBRAIC, FIRST)
+
+
+@dataclass(eq=False)
+class StateBlock:
+    """A block of unknowns declared by an element.
+
+    Parameters
+    ----------
+    owner
+        The declaring element (a body, a joint's scalar, a first-order element); the layout is
+        looked up by it.
+    kind
+        ``"second"``, ``"first"`` or ``"algebraic"``.
+    size
+        Number of unknowns.
+    initial, rate
+        Initial values and rates (units of the unknowns, per second for rates).
+    mass
+        Constant mass matrix (second order) or A matrix (first order) as a dense
+        ``size × size`` array; ``None`` is zero (algebraic blocks must leave it ``None``).
+    units, long_name
+        Of the unknowns, for results.
+    """
+
+    owner: object
+    kind: str
+    size: int
+    initial: Array = field(default_factory=lambda: np.zeros(0))
+    rate: Array = field(default_factory=lambda: np.zeros(0))
+    mass: Array | None = None
+    units: str = "1"
+    long_name: str = ""
+
+    def __post_init__(self) -> None:
+        if self.kind not in KINDS:
+            raise ValueError(f"state kind {self.kind!r} must be one of {', '.join(KINDS)}")
+        if self.kind == ALGEBRAIC and self.mass is not None:
+            raise ValueError("algebraic states are massless (mass must be None)")
+        self.initial = np.broadcast_to(np.asarray(self.initial, dtype=float),
+                                       (self.size,)).copy()
+        self.rate = np.broadcast_to(np.asarray(self.rate, dtype=float), (self.size,)).copy()
+
+
+class Layout:
+    """Numbering of the declared state blocks.
+
+    Attributes
+    ----------
+    n
+        Number of unknowns.
+    offset
+        ``owner → index`` of the first unknown of the owner's (first) block.
+    kind
+        Per unknown, the index into :data:`KINDS` (0 second, 1 algebraic, 2 first order).
+    second, algebraic, first
+        Index arrays of the unknowns of each kind.
+    """
+
+    def __init__(self, blocks: list[StateBlock]) -> None:
+        owners = [b.owner for b in blocks]
+        if len({id(o) for o in owners}) != len(owners):
+            raise ValueError("an element declared two state blocks under the same owner")
+        ordered = [b for k in KINDS for b in blocks if b.kind == k]
+        self.blocks = ordered
+        self.offset: dict = {}
+        n = 0
+        kinds = []
+        for b in ordered:
+            self.offset[b.owner] = n
+            n += b.size
+            kinds += [KINDS.index(b.kind)] * b.size
+        self.n = n
+        self.kind = np.array(kinds, dtype=np.int8)
+        self.second = np.nonzero(self.kind == 0)[0]
+        self.algebraic = np.nonzero(self.kind == 1)[0]
+        self.first = np.nonzero(self.kind == 2)[0]
+        self.n_second_coordinates = len(self.second)
+
+    def initial(self) -> tuple[Array, Array]:
+        """Declared initial values and rates."""
+        q = np.zeros(self.n)
+        v = np.zeros(self.n)
+        for b in self.blocks:
+            o = self.offset[b.owner]
+            q[o : o + b.size] = b.initial
+            v[o : o + b.size] = b.rate
+        return q, v
+
+    def mass_matrices(self) -> tuple[sp.csr_matrix, sp.csr_matrix]:
+        """(M, A): the second-order mass matrix and the first-order A matrix, both n × n,
+        structural non-zeros only."""
+        out = []
+        for kind in (SECOND, FIRST):
+            rows, cols, vals = [], [], []
+            for b in self.blocks:
+                if b.kind != kind or b.mass is None:
+                    continue
+                o = self.offset[b.owner]
+                r, c = np.nonzero(b.mass)
+                rows.append(o + r)
+                cols.append(o + c)
+                vals.append(b.mass[r, c])
+            out.append(sp.csr_matrix((_cat(vals, float), (_cat(rows, np.int64),
+                                                           _cat(cols, np.int64))),
+                                     shape=(self.n, self.n)))
+        return out[0], out[1]
+
+
+def _cat(parts: list, dtype) -> np.ndarray:
+    return np.concatenate(parts).astype(dtype) if parts else np.zeros(0, dtype=dtype)
