@@ -6,11 +6,14 @@ its own case file (``cases/<case_id>.nc``) through a temporary file in the same 
 reads them all and writes the consolidated archive, following the CF-1.11 conventions.
 
 Case file (one case)
-    The case summary made by :func:`case_summary`: harmonics from
-    :func:`pipelines.harmonics.case_harmonics` (the ``bifilar`` dimension renamed
-    ``bifilar_index`` so that it can never clash with a model parameter called ``bifilar``), the
-    last recorded revolution of the time histories (dimension ``time_in_rev``, coordinate ``psi``
-    in degrees) and a few ``run_*`` scalars; global attributes ``case_id``, ``model``,
+    The case summary made by :func:`case_summary` from the model's output declarations
+    (:class:`studies.parameters.Output`): its scalar results; for a per-rev periodic model
+    (the hub) the harmonics from :func:`studies.harmonics.case_harmonics`, the last recorded
+    revolution of the declared histories (dimension ``time_in_rev``, coordinate ``psi`` in
+    degrees) and a few ``run_*`` scalars; for any other model (collar, pendulum) the declared
+    histories whole (dimension ``sample``, with the variable ``time``). An output dimension named
+    like a model parameter is renamed ``<dim>_index`` (the hub's ``bifilar`` becomes
+    ``bifilar_index``). Global attributes ``case_id``, ``model``,
     ``parameters`` (JSON), ``status``, ``message``, ``wall_time`` and, for a failure,
     ``traceback``. A failed case holds the attributes only.
 
@@ -39,7 +42,8 @@ import dask.config
 import numpy as np
 import xarray as xr
 
-from pipelines.harmonics import N_MAX, case_harmonics, recording_layout
+from studies.harmonics import N_MAX, case_harmonics, harmonic_names, recording_layout
+from studies.parameters import ModelSpec
 
 CONVENTIONS = "CF-1.11"
 REFERENCES = (
@@ -60,27 +64,46 @@ COMPRESSION = {"zlib": True, "complevel": 4}
 # Missing value of integer variables (a failed case has no revolution count).
 INT_FILL = -1
 
-# Time histories kept per case (last recorded revolution) for the plots: name -> default units,
-# long_name (used if the model did not give them).
-HISTORY_VARIABLES: dict[str, tuple[str, str]] = {
-    "pin_angle": ("degree", "bifilar pin angle"),
-    "hub_x_fixed": ("m", "hub x displacement, fixed frame"),
-    "hub_y_fixed": ("m", "hub y displacement, fixed frame"),
-    "bifilar_cm_x_fixed": ("m", "x displacement of the bifilar tuning masses' centre of mass, "
-                                "fixed frame"),
-    "bifilar_cm_y_fixed": ("m", "y displacement of the bifilar tuning masses' centre of mass, "
-                                "fixed frame"),
-    "hub_force_x_fixed": ("N", "in-plane hub force on the fuselage, x, fixed frame"),
-    "hub_force_y_fixed": ("N", "in-plane hub force on the fuselage, y, fixed frame"),
-}
-
-# Names the archive itself uses: a model parameter with one of these names cannot be archived.
+# Names the archive itself uses, whatever the model: a model parameter with one of these names (or
+# with the name of one of the model's archived outputs, see :func:`reserved_names`) cannot be
+# archived.
 RESERVED_NAMES = frozenset(
     {"case", "case_name", "case_id", "status", "message", "harmonic", "direction",
-     "bifilar_index", "time_in_rev", "psi", "run_hub_speed", "run_revolutions",
+     "time_in_rev", "psi", "sample", "time", "run_hub_speed", "run_revolutions",
      "run_transient_revolutions", "run_samples_per_rev", "run_wall_time"}
-    | set(HISTORY_VARIABLES)
 )
+
+
+def history_variables(spec: ModelSpec) -> dict[str, tuple[str, str]]:
+    """Time histories the archive keeps per case: name -> (units, long_name), as declared."""
+    return {name: (out.units, out.long_name) for name, out in spec.outputs.items()
+            if out.history and not out.is_vector and "time" in out.dims}
+
+
+def scalar_variables(spec: ModelSpec) -> dict[str, tuple[str, str]]:
+    """Scalar results the archive keeps per case: name -> (units, long_name), as declared."""
+    return {name: (out.units, out.long_name) for name, out in spec.outputs.items()
+            if out.is_scalar}
+
+
+def _renamed(dim: str, spec: ModelSpec) -> str:
+    """Archive name of an output dimension: ``<dim>_index`` if a parameter has its name."""
+    return f"{dim}_index" if dim in spec.parameters else dim
+
+
+def reserved_names(spec: ModelSpec) -> frozenset[str]:
+    """Every name the archive of ``spec`` uses besides its parameters.
+
+    :data:`RESERVED_NAMES`, the archived scalar results and histories, the harmonic variables
+    (:func:`studies.harmonics.harmonic_names`) and the output dimensions.
+    """
+    names = set(RESERVED_NAMES) | set(scalar_variables(spec)) | set(history_variables(spec))
+    if spec.periodic:
+        names |= set(harmonic_names(spec.outputs))
+    for name, out in spec.outputs.items():
+        if name in names or (spec.periodic and out.harmonics):
+            names |= {_renamed(d, spec) for d in out.dims if d != "time"}
+    return frozenset(names)
 
 
 class ArchiveError(ValueError):
@@ -103,7 +126,9 @@ def global_attrs(*, title: str, model: str, study_text: str, command: str) -> di
     title
         Short description of the study.
     model
-        Name of the model that produced the cases.
+        The model that produced the cases as the study file gives it (registry name or
+        ``module:attribute``), so that :func:`pipelines.plots.plot_archive` can find its output
+        declarations again.
     study_text
         Full text of the study file, kept so the archive alone can reproduce the study.
     command
@@ -150,54 +175,104 @@ def _psi_coord(samples_per_rev: int) -> xr.Variable:
     )
 
 
-def case_summary(ds: xr.Dataset, n_max: int = N_MAX) -> xr.Dataset:
-    """What the archive keeps of one model result: harmonics and one revolution of histories.
+def case_summary(ds: xr.Dataset, spec: ModelSpec, n_max: int = N_MAX) -> xr.Dataset:
+    """What the archive keeps of one model result, as the model's outputs declare.
 
     Parameters
     ----------
     ds
-        Model result in the hub layout (see :func:`pipelines.harmonics.case_harmonics`).
+        The model result (:attr:`ModelSpec.run`), filled through its declarations.
+    spec
+        The model: its :attr:`~studies.parameters.ModelSpec.outputs` say what is kept; an output
+        dimension named like one of its parameters is renamed ``<dim>_index`` (the hub's
+        ``bifilar`` dimension becomes ``bifilar_index``, since ``bifilar`` is a parameter).
     n_max
-        Highest harmonic kept.
+        Highest harmonic kept (per-rev periodic models).
 
     Returns
     -------
     xarray.Dataset
-        Harmonic variables (dims ``direction``, ``harmonic`` or ``bifilar_index``, ``harmonic``);
-        the time histories of :data:`HISTORY_VARIABLES` over the last recorded revolution (dim
-        ``time_in_rev``, coordinate ``psi`` in degree, starting at psi = 0); ``run_hub_speed``
-        (rad s-1), ``run_revolutions``, ``run_transient_revolutions``, ``run_samples_per_rev``.
+        Every declared scalar result (dims ``()``). For a per-rev periodic model
+        (:attr:`ModelSpec.periodic`): the harmonics of :func:`studies.harmonics.case_harmonics`,
+        the declared histories over the last recorded revolution (dim ``time_in_rev``,
+        coordinate ``psi`` in degree, starting at psi = 0), ``run_hub_speed`` (rad s-1),
+        ``run_revolutions``, ``run_samples_per_rev`` and ``run_transient_revolutions``.
+        Otherwise: the declared histories whole (dim ``sample``) with their ``time`` (s).
+        Every variable has the ``units`` and ``long_name`` of its declaration.
+
+    Raises
+    ------
+    ValueError
+        If a declared scalar result or history is missing from ``ds``, or (periodic models) the
+        time base is not whole revolutions.
     """
-    omega, n, revs, psi0 = recording_layout(ds)
-    out = case_harmonics(ds, n_max)
-    if "bifilar" in out.dims:
-        out = out.rename({"bifilar": "bifilar_index"})
-    psi_last = psi0 + 2 * np.pi * (revs - 1)
-    for name, (units, long_name) in HISTORY_VARIABLES.items():
-        if name not in ds:
+    histories = history_variables(spec)
+    scalars = scalar_variables(spec)
+    missing = [name for name in (*scalars, *histories) if name not in ds]
+    if missing:
+        raise ValueError(f"model result lacks declared output(s) {', '.join(missing)}")
+    if spec.periodic:
+        omega, n, revs, psi0 = recording_layout(ds)
+        out = case_harmonics(ds, spec.outputs, n_max)
+        psi_last = psi0 + 2 * np.pi * (revs - 1)
+        for name, (units, long_name) in histories.items():
+            other = tuple(d for d in ds[name].dims if d != "time")
+            var = ds[name].transpose(*other, "time")
+            attrs = {"units": units, "long_name": long_name,
+                     "comment": "last recorded revolution, from azimuth psi = 0"}
+            out[name] = ((*other, "time_in_rev"),
+                         _one_revolution(var.values.astype(float), n, psi_last), attrs)
+            out = _copy_coords(out, ds, other)
+        if histories:
+            out = out.assign_coords(psi=_psi_coord(n))
+        out["run_hub_speed"] = ((), omega, {"units": "rad s-1", "long_name": "rotor speed"})
+        out["run_revolutions"] = ((), np.int32(revs),
+                                  {"units": "1", "long_name": "revolutions recorded"})
+        out["run_samples_per_rev"] = ((), np.int32(n),
+                                      {"units": "1", "long_name": "samples per revolution"})
+        if "transient_revolutions" in ds.attrs:
+            out["run_transient_revolutions"] = (
+                (), np.int32(ds.attrs["transient_revolutions"]),
+                {"units": "1", "long_name": "revolutions simulated before recording"},
+            )
+    else:
+        out = xr.Dataset()
+        for name, (units, long_name) in histories.items():
+            other = tuple(d for d in ds[name].dims if d != "time")
+            var = ds[name].transpose(*other, "time")
+            out[name] = ((*other, "sample"), var.values,
+                         {"units": units, "long_name": long_name,
+                          "comment": "whole time history; shorter cases are padded with NaN"})
+            out = _copy_coords(out, ds, other)
+        if histories:
+            decl = spec.outputs.get("time")
+            time_attrs = decl.attrs() if decl is not None else {"units": "s", "long_name": "time"}
+            out["time"] = ("sample", np.asarray(ds["time"].values, dtype=float), time_attrs)
+            out = out.assign_coords(sample=_sample_coord(ds.sizes["time"]))
+    for name, (units, long_name) in scalars.items():
+        out[name] = ((), ds[name].values, {"units": units, "long_name": long_name})
+    renames = {d: _renamed(d, spec) for d in out.dims if _renamed(d, spec) != d}
+    return out.rename(renames) if renames else out
+
+
+def _copy_coords(out: xr.Dataset, ds: xr.Dataset, dims: tuple[str, ...]) -> xr.Dataset:
+    """Coordinates of the extra output dimensions ``dims`` (an index if the model gave none)."""
+    for dim in dims:
+        if dim in out.coords:
             continue
-        var = ds[name]
-        if name == "pin_angle":
-            var = var.transpose("bifilar", "time")
-            dims: tuple[str, ...] = ("bifilar_index", "time_in_rev")
+        if dim in ds.coords:
+            coord = ds[dim].variable.copy()
+            coord.attrs = {"units": "1", "long_name": f"{dim} index", **coord.attrs}
         else:
-            dims = ("time_in_rev",)
-        attrs = {"units": var.attrs.get("units", units),
-                 "long_name": var.attrs.get("long_name", long_name),
-                 "comment": "last recorded revolution, from azimuth psi = 0"}
-        out[name] = (dims, _one_revolution(var.values.astype(float), n, psi_last), attrs)
-    out = out.assign_coords(psi=_psi_coord(n))
-    out["run_hub_speed"] = ((), omega, {"units": "rad s-1", "long_name": "rotor speed"})
-    out["run_revolutions"] = ((), np.int32(revs),
-                              {"units": "1", "long_name": "revolutions recorded"})
-    out["run_samples_per_rev"] = ((), np.int32(n),
-                                  {"units": "1", "long_name": "samples per revolution"})
-    if "transient_revolutions" in ds.attrs:
-        out["run_transient_revolutions"] = (
-            (), np.int32(ds.attrs["transient_revolutions"]),
-            {"units": "1", "long_name": "revolutions simulated before recording"},
-        )
+            coord = xr.Variable(dim, np.arange(ds.sizes[dim]),
+                                {"units": "1", "long_name": f"{dim} index"})
+        out = out.assign_coords({dim: coord})
     return out
+
+
+def _sample_coord(samples: int) -> xr.Variable:
+    return xr.Variable("sample", np.arange(samples, dtype=np.int32),
+                       {"units": "1", "long_name": "sample number of the time histories"})
 
 
 def _float_encoding(ds: xr.Dataset) -> dict[str, dict[str, Any]]:
@@ -303,6 +378,20 @@ def _upsample(values: np.ndarray, samples: int) -> np.ndarray:
     return np.fft.irfft(spectrum, n=samples, axis=-1) * (samples / n)
 
 
+def _pad(values: np.ndarray, axis: int, length: int) -> np.ndarray:
+    """``values`` extended with NaN to ``length`` along ``axis`` (a shorter time history)."""
+    width = [(0, 0)] * values.ndim
+    width[axis] = (0, length - values.shape[axis])
+    return np.pad(values.astype(float), width, constant_values=np.nan)
+
+
+def status_counts(archive: xr.Dataset) -> dict[str, int]:
+    """Number of cases per status (``ok``, ``failed``, ``not_run``) of an opened archive."""
+    status = np.asarray(archive["status"].values)
+    return {meaning: int((status == flag).sum())
+            for flag, meaning in zip(FLAG_VALUES, FLAG_MEANINGS.split(), strict=True)}
+
+
 def consolidate(
     path: str | os.PathLike[str],
     *,
@@ -359,21 +448,26 @@ def consolidate(
             loaded.append((entry.index, ds))
 
     # Layout of the per-case variables: the union over finished cases, at the finest azimuth
-    # resolution among them (cases may differ in samples_per_rev).
+    # resolution among them (cases may differ in samples_per_rev), and as long as the longest
+    # whole time history (cases may differ in their number of time steps).
     samples = max((ds.sizes.get("time_in_rev", 0) for _, ds in loaded), default=0)
+    steps = max((ds.sizes.get("sample", 0) for _, ds in loaded), default=0)
+    resized = {"time_in_rev": samples, "sample": steps}
     template: dict[str, xr.Variable] = {}
     inner_coords: dict[str, xr.Variable] = {}
     for _, ds in loaded:
         for name, var in ds.data_vars.items():
             if name not in template:
-                sizes = {d: (samples if d == "time_in_rev" else var.sizes[d]) for d in var.dims}
+                sizes = {d: resized.get(d, var.sizes[d]) for d in var.dims}
                 template[name] = xr.Variable(var.dims, np.empty(tuple(sizes.values()), var.dtype),
                                              var.attrs)
         for name, coord in ds.coords.items():
-            if name != "psi" and name not in inner_coords:
+            if name not in ("psi", "sample") and name not in inner_coords:
                 inner_coords[name] = coord.variable
     if samples:
         inner_coords["psi"] = _psi_coord(samples)
+    if steps:
+        inner_coords["sample"] = _sample_coord(steps)
 
     data_vars: dict[str, xr.Variable] = {}
     encoding: dict[str, dict[str, Any]] = {}
@@ -387,6 +481,8 @@ def consolidate(
             case_values = ds[name].transpose(*var.dims).values
             if "time_in_rev" in var.dims:
                 case_values = _upsample(case_values, samples)
+            if "sample" in var.dims and case_values.shape != var.shape:
+                case_values = _pad(case_values, var.dims.index("sample"), steps)
             if case_values.shape != var.shape:
                 raise ArchiveError(
                     f"variable {name!r} has shape {case_values.shape} in case "

@@ -6,10 +6,12 @@
     bifilar plot ARCHIVE --out DIR [--format png --format pdf]
     bifilar run [--out DIR] [--workers N | --scheduler ADDRESS]
 
-A problem the user can fix (an invalid study file, a parameter out of range, a missing file, an
-unreachable scheduler) prints one line ``error: ...`` to stderr and exits with status 2, never a
-traceback; a traceback means a bug. An interrupted sweep exits with status 130 and resumes when
-the same command is run again.
+Exit status: 0 when every case of the study finished ok; 1 when the sweep finished but some
+cases failed or did not run (the archive is still written, and the last line on stderr says how
+many and where their messages are); 2 for a problem the user can fix (an invalid study file, a
+parameter out of range, a missing file, an unreachable scheduler, an archive with nothing to
+plot), reported as one line ``error: ...`` on stderr, never a traceback (a traceback means a
+bug); 130 for an interrupted sweep, which resumes when the same command is run again.
 """
 
 from __future__ import annotations
@@ -25,12 +27,13 @@ from typing import NoReturn
 
 import click
 
-from pipelines.archive import ArchiveError, code_version
+from pipelines.archive import ArchiveError, code_version, open_archive, status_counts
 from pipelines.study_commands import collar, pendulum
-from pipelines.sweep import StudyError, SweepError, run_sweep
+from pipelines.sweep import CASES_DIR, StudyError, SweepError, run_sweep
 from studies.parameters import ParameterError
 
 DEFAULT_STUDY = "default_study.toml"
+EXIT_FAILED_CASES = 1
 EXIT_USER_ERROR = 2
 EXIT_INTERRUPTED = 130
 
@@ -78,6 +81,28 @@ def _user_errors() -> Iterator[None]:
         click.echo("error: interrupted; finished cases are kept, run the same command again "
                    "to resume", err=True)
         raise click.exceptions.Exit(EXIT_INTERRUPTED) from None
+
+
+def _not_ok(archive: Path) -> tuple[dict[str, int], str | None]:
+    """Status counts of a finished sweep's archive and, if some case is not ok, the line that
+    says how many and where their messages are."""
+    counts = status_counts(open_archive(archive))
+    bad = counts["failed"] + counts["not_run"]
+    if not bad:
+        return counts, None
+    total = sum(counts.values())
+    return counts, (
+        f"error: {bad} of {total} case(s) not ok ({counts['failed']} failed, "
+        f"{counts['not_run']} not run); their messages are in the 'message' variable of "
+        f"{archive} and in {archive.parent / CASES_DIR}/<case_id>.nc (--retry-failed "
+        "recomputes failed cases)"
+    )
+
+
+def _exit_if_not_ok(line: str | None) -> None:
+    if line is not None:
+        click.echo(line, err=True)
+        raise click.exceptions.Exit(EXIT_FAILED_CASES)
 
 
 def _check_exclusive(workers: int | None, scheduler: str | None) -> None:
@@ -133,7 +158,8 @@ def sweep(ctx: click.Context, study: Path, out_dir: Path, workers: int | None,
 
     The study's model is a registry name (model = "hub") or a plug-in given as
     model = "package.module:SPEC". Cases already in DIR/cases are not recomputed, so an
-    interrupted sweep resumes when run again. Prints the archive path.
+    interrupted sweep resumes when run again. Prints the archive path. Exit status 0 if every
+    case is ok, 1 if some failed or did not run, 2 for bad input.
     """
     _check_exclusive(workers, scheduler)
     command = _command_line(ctx, str(study), "--out", str(out_dir),
@@ -142,7 +168,9 @@ def sweep(ctx: click.Context, study: Path, out_dir: Path, workers: int | None,
     with _user_errors(), _terminate_as_interrupt():
         archive = run_sweep(study, out_dir, workers=workers, scheduler=scheduler,
                             progress=not quiet, retry_failed=retry_failed, command=command)
+        _, not_ok = _not_ok(archive)
     click.echo(str(archive))
+    _exit_if_not_ok(not_ok)
 
 
 @main.command()
@@ -152,7 +180,11 @@ def sweep(ctx: click.Context, study: Path, out_dir: Path, workers: int | None,
 @click.option("--format", "formats", multiple=True, type=click.Choice(["png", "pdf", "svg"]),
               default=("png", "pdf"), show_default=True, help="File format (repeatable).")
 def plot(archive: Path, out_dir: Path, formats: tuple[str, ...]) -> None:
-    """Write the report figures of ARCHIVE into DIR; prints their paths."""
+    """Write the report figures of ARCHIVE into DIR; prints their paths.
+
+    Exit status 2 with one error line if ARCHIVE is not a sweep archive or no case in it
+    finished ok.
+    """
     from pipelines.plots import plot_archive  # matplotlib only when plotting
 
     with _user_errors():
@@ -169,7 +201,10 @@ def plot(archive: Path, out_dir: Path, formats: tuple[str, ...]) -> None:
 @scheduler_option
 @click.pass_context
 def run(ctx: click.Context, out_dir: Path, workers: int | None, scheduler: str | None) -> None:
-    """Run the built-in study (the paper's Table 1, cases 0-3) and plot it into DIR/plots."""
+    """Run the built-in study (the paper's Table 1, cases 0-3) and plot it into DIR/plots.
+
+    Exit status 0 if every case is ok, 1 if some failed (the ok ones are still plotted).
+    """
     from pipelines.plots import plot_archive
 
     _check_exclusive(workers, scheduler)
@@ -177,10 +212,12 @@ def run(ctx: click.Context, out_dir: Path, workers: int | None, scheduler: str |
     with _user_errors(), _terminate_as_interrupt(), resources.as_file(default_study()) as study:
         archive = run_sweep(study, out_dir, workers=workers, scheduler=scheduler,
                             command=command)
-        paths = plot_archive(archive, out_dir / "plots")
+        counts, not_ok = _not_ok(archive)
+        paths = plot_archive(archive, out_dir / "plots") if counts["ok"] else []
     click.echo(str(archive))
     for path in paths:
         click.echo(str(path))
+    _exit_if_not_ok(not_ok)
 
 
 # --- single-model commands ----------------------------------------------------------------------

@@ -5,21 +5,25 @@ PDF backends at ``savefig``: no pyplot state, so importing this module never cha
 interactive backend of a notebook, and a figure is freed as soon as it goes out of scope (the
 memory ``plt.close(fig)`` would release is never registered with pyplot in the first place).
 
-Figures written by :func:`plot_archive`:
+Which figures are drawn is generated from the model's output declarations
+(:class:`studies.parameters.Output`; the archive's ``model`` attribute names the model). Figures
+written by :func:`plot_archive` for a per-rev periodic model (the hub):
 
-``harmonics_<quantity>``
-    Grouped bars of the per-rev harmonic amplitudes 0..8, one bar per case, for the hub
-    displacement in the rotating frame (Fig. 17), the hub in-plane force in the fixed frame
-    (Figs. 18–19) and the hub displacement in the fixed frame. For a Cartesian sweep of more than
-    :data:`MAX_BAR_CASES` cases: ``harmonics_<quantity>_vs_<parameter>``, the dominant harmonic
+``harmonics_<vector>``
+    Grouped bars of the per-rev harmonic amplitudes 0..8, one bar per case, for every declared
+    in-plane vector (the hub displacement in the rotating frame, Fig. 17; the hub in-plane force
+    in the fixed frame, Figs. 18–19; …). For a Cartesian sweep of more than
+    :data:`MAX_BAR_CASES` cases: ``harmonics_<vector>_vs_<parameter>``, the dominant harmonic
     amplitudes against the first swept parameter, one line per value of the others.
-``pin_angles``
-    Pin angles of the opposite bifilars 0 and 2 over one revolution, one panel per free case
-    (Fig. 14).
-``orbits``
-    In-plane orbits of the hub and of the bifilar tuning masses' centre of mass (Fig. 15).
-``hub_force_history``
-    Transmitted in-plane hub force over one revolution (Fig. 16).
+``<figure>`` of the declarations, over one revolution
+    Vectors as orbits (``orbits``: hub and bifilar centre of mass, Fig. 15); a history with an
+    extra dimension as one panel per case (``pin_angles``, Fig. 14; cases where it is zero
+    throughout, e.g. locked bifilars, are left out); other histories as one panel each with one
+    line per case (``hub_force_history``, Fig. 16).
+
+For any other model (collar, pendulum): ``results`` (or ``results_vs_<parameter>`` for a
+sweep), the declared scalar results against the cases, and the declared histories against time
+(``<figure>``).
 
 Time-history figures hold at most :data:`CASES_PER_PAGE` cases; more go on further pages
 (``pin_angles_p2`` …).
@@ -37,7 +41,8 @@ import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 
-from pipelines.archive import STATUS_OK, open_archive
+from pipelines.archive import STATUS_OK, ArchiveError, open_archive, status_counts
+from studies.parameters import ModelSpec, Output
 
 # More bars than this per harmonic group are unreadable: a sweep switches to line plots.
 MAX_BAR_CASES = 8
@@ -45,14 +50,6 @@ MAX_BAR_CASES = 8
 CASES_PER_PAGE = 8
 FORMATS = ("png", "pdf")
 DPI = 150
-
-# Harmonic bar charts: variable -> figure title.
-HARMONIC_FIGURES = {
-    "hub_displacement_rotating": "Hub displacement harmonics, rotating frame",
-    "hub_force_fixed": "Hub in-plane force harmonics, fixed frame",
-    "hub_displacement_fixed": "Hub displacement harmonics, fixed frame",
-}
-
 
 def _save(fig: Figure, out_dir: Path, stem: str, formats: Sequence[str]) -> list[Path]:
     paths = []
@@ -98,14 +95,10 @@ def _cases(ds: xr.Dataset) -> list[tuple[str, dict[str, int], bool]]:
     return out
 
 
-def _is_free(ds: xr.Dataset, sel: dict[str, int]) -> bool:
-    """Whether a case's bifilars are free to swing (a locked case has nothing to plot)."""
-    if "bifilar" in ds.variables and ds["bifilar"].dtype.kind in "OUS":
-        setting = ds["bifilar"].isel({k: v for k, v in sel.items() if k in ds["bifilar"].dims})
-        if str(setting.values) == "locked":
-            return False
-    pins = ds["pin_angle"].isel(sel).values
-    return bool(np.isfinite(pins).all() and np.abs(pins).max() > 0)
+def _swings(values: np.ndarray) -> bool:
+    """Whether a case's history is worth a panel: finite and not zero throughout (a locked
+    bifilar does not swing)."""
+    return bool(np.isfinite(values).all() and np.abs(values).max() > 0)
 
 
 def _pages(items: list[Any]) -> list[list[Any]]:
@@ -213,84 +206,189 @@ def _harmonic_lines(ds: xr.Dataset, name: str, title: str, out_dir: Path,
     return _save(fig, out_dir, f"harmonics_{name}_vs_{first}", formats)
 
 
-def _pin_angles(ds: xr.Dataset, cases: list[tuple[str, dict[str, int], bool]],
-                out_dir: Path, formats: Sequence[str]) -> list[Path]:
-    free = [c for c in cases if c[2] and _is_free(ds, c[1])]
-    psi = ds["psi"].values
-    units = ds["pin_angle"].attrs.get("units", "degree")
+Cases = list[tuple[str, dict[str, int], bool]]
+
+
+def _time_axis(ds: xr.Dataset, sel: dict[str, int]) -> tuple[np.ndarray, str]:
+    """Abscissa of a case's archived history: azimuth (periodic) or its time (s)."""
+    if "psi" in ds.coords:
+        return ds["psi"].values, "rotor azimuth psi (degree)"
+    return ds["time"].isel(sel).values, "time (s)"
+
+
+def _finish_axis(ax: Any, ds: xr.Dataset) -> None:
+    if "psi" in ds.coords:
+        _psi_axis(ax)
+    else:
+        ax.grid(True, alpha=0.3)
+
+
+def _over(ds: xr.Dataset) -> str:
+    return "over one revolution" if "psi" in ds.coords else "against time"
+
+
+def _indexed_history(ds: xr.Dataset, name: str, stem: str, cases: Cases, out_dir: Path,
+                     formats: Sequence[str]) -> list[Path]:
+    """A history with an extra dimension (e.g. one per bifilar): one panel per case."""
+    var = ds[name]
+    inner = [d for d in var.dims if d not in _case_dims(ds) and d not in ("time_in_rev",
+                                                                          "sample")]
+    index = inner[0]
+    shown = [c for c in cases if c[2] and _swings(var.isel(c[1]).values)]
+    units = var.attrs.get("units", "")
+    styles = ("-", "-.", "--", ":")
     paths: list[Path] = []
-    pages = _pages(free)
+    pages = _pages(shown)
     for page, chunk in enumerate(pages):
         fig = Figure(figsize=(8, 1.0 + 2.2 * len(chunk)), layout="constrained")
         axes = fig.subplots(len(chunk), 1, sharex=True, squeeze=False)[:, 0]
         for ax, (label, sel, _ok) in zip(axes, chunk, strict=True):
-            pins = ds["pin_angle"].isel(sel)
-            for pin, style in ((0, "-"), (2, "-.")):
-                ax.plot(psi, pins.sel(bifilar_index=pin).values, style, color="black",
-                        label=f"bifilar {pin}")
+            x, xlabel = _time_axis(ds, sel)
+            values = var.isel(sel)
+            for k, item in enumerate(ds[index].values):
+                ax.plot(x, values.sel({index: item}).values, styles[k % len(styles)],
+                        color=_colors(ds.sizes[index])[k], label=f"{index} {_format(item)}")
             ax.set_title(label, fontsize="medium")
-            ax.set_ylabel(f"pin angle ({units})")
-            _psi_axis(ax)
-            ax.legend(fontsize="small", loc="upper right")
-        axes[-1].set_xlabel("rotor azimuth psi (degree)")
-        fig.suptitle("Pin angles of opposite bifilars 0 and 2 over one revolution")
-        paths += _save(fig, out_dir, _page_stem("pin_angles", page, len(pages)), formats)
+            ax.set_ylabel(_axis_label(var.attrs, name) if units else name)
+            _finish_axis(ax, ds)
+        axes[-1].set_xlabel(xlabel)
+        _legend(fig, axes[0])
+        fig.suptitle(f"{var.attrs.get('long_name', name)} {_over(ds)}")
+        paths += _save(fig, out_dir, _page_stem(stem, page, len(pages)), formats)
     return paths
 
 
-def _orbits(ds: xr.Dataset, cases: list[tuple[str, dict[str, int], bool]],
+def _orbits(ds: xr.Dataset, vectors: dict[str, Output], stem: str, cases: Cases,
             out_dir: Path, formats: Sequence[str]) -> list[Path]:
-    panels = [(p, t) for p, t in (("hub", "hub centre"), ("bifilar_cm", "bifilar centre of mass"))
-              if f"{p}_x_fixed" in ds and f"{p}_y_fixed" in ds]
+    """In-plane vectors as orbits: one panel per vector, one line per case."""
     ok = [c for c in cases if c[2]]
-    scale, units = _display_units("m", np.concatenate(
-        [ds[f"{p}_{a}_fixed"].values.ravel() for p, _ in panels for a in "xy"]))
+    by_units: dict[str, tuple[float, str]] = {}
+    for units in {v.units for v in vectors.values()}:
+        by_units[units] = _display_units(units, np.concatenate(
+            [ds[c].values.ravel() for v in vectors.values() if v.units == units
+             for c in v.components or ()]))
     paths: list[Path] = []
     pages = _pages(ok)
     for page, chunk in enumerate(pages):
-        fig = Figure(figsize=(5.2 * len(panels), 5.8), layout="constrained")
-        axes = fig.subplots(1, len(panels), squeeze=False)[0]
+        fig = Figure(figsize=(5.2 * len(vectors), 5.8), layout="constrained")
+        axes = fig.subplots(1, len(vectors), squeeze=False)[0]
         colors = _colors(len(chunk))
-        for ax, (prefix, what) in zip(axes, panels, strict=True):
+        for ax, vector in zip(axes, vectors.values(), strict=True):
+            cx, cy = vector.components or ("", "")
+            scale, units = by_units[vector.units]
             for (label, sel, _ok), color in zip(chunk, colors, strict=True):
-                x = ds[f"{prefix}_x_fixed"].isel(sel).values * scale
-                y = ds[f"{prefix}_y_fixed"].isel(sel).values * scale
-                # Close the periodic orbit: the last revolution ends where it began.
-                ax.plot(np.append(x, x[0]), np.append(y, y[0]), color=color, label=label)
+                x = ds[cx].isel(sel).values * scale
+                y = ds[cy].isel(sel).values * scale
+                if "psi" in ds.coords:
+                    # Close the periodic orbit: the last revolution ends where it began.
+                    x, y = np.append(x, x[0]), np.append(y, y[0])
+                ax.plot(x, y, color=color, label=label)
             ax.set_aspect("equal", adjustable="datalim")
-            ax.set_title(what, fontsize="medium")
-            ax.set_xlabel(f"x, fixed frame ({units})")
-            ax.set_ylabel(f"y, fixed frame ({units})")
+            ax.set_title(vector.long_name, fontsize="medium", wrap=True)
+            ax.set_xlabel(f"x ({units})")
+            ax.set_ylabel(f"y ({units})")
             ax.grid(True, alpha=0.3)
         _legend(fig, axes[0])
-        fig.suptitle("In-plane orbits over one revolution")
-        paths += _save(fig, out_dir, _page_stem("orbits", page, len(pages)), formats)
+        fig.suptitle(f"In-plane orbits {_over(ds)}")
+        paths += _save(fig, out_dir, _page_stem(stem, page, len(pages)), formats)
     return paths
 
 
-def _force_history(ds: xr.Dataset, cases: list[tuple[str, dict[str, int], bool]],
-                   out_dir: Path, formats: Sequence[str]) -> list[Path]:
+def _histories(ds: xr.Dataset, names: list[str], stem: str, cases: Cases, out_dir: Path,
+               formats: Sequence[str]) -> list[Path]:
+    """Histories without an extra dimension: one panel per history, one line per case."""
     ok = [c for c in cases if c[2]]
-    psi = ds["psi"].values
-    scale, units = _display_units("N", np.concatenate(
-        [ds[f"hub_force_{a}_fixed"].values.ravel() for a in "xy"]))
     paths: list[Path] = []
     pages = _pages(ok)
     for page, chunk in enumerate(pages):
-        fig = Figure(figsize=(9, 6.5), layout="constrained")
-        axes = fig.subplots(2, 1, sharex=True)
+        fig = Figure(figsize=(9, 1.5 + 2.5 * len(names)), layout="constrained")
+        axes = fig.subplots(len(names), 1, sharex=True, squeeze=False)[:, 0]
         colors = _colors(len(chunk))
-        for ax, axis in zip(axes, "xy", strict=True):
+        for ax, name in zip(axes, names, strict=True):
+            var = ds[name]
+            scale, units = _display_units(var.attrs.get("units", ""), var.values)
             for (label, sel, _ok), color in zip(chunk, colors, strict=True):
-                ax.plot(psi, ds[f"hub_force_{axis}_fixed"].isel(sel).values * scale,
-                        color=color, label=label)
-            ax.set_ylabel(f"force {axis}, fixed frame ({units})")
-            _psi_axis(ax)
-        axes[-1].set_xlabel("rotor azimuth psi (degree)")
+                x, xlabel = _time_axis(ds, sel)
+                ax.plot(x, var.isel(sel).values * scale, color=color, label=label)
+            ax.set_ylabel(_axis_label({**var.attrs, "units": units}, name), wrap=True)
+            _finish_axis(ax, ds)
+        axes[-1].set_xlabel(xlabel)
         _legend(fig, axes[0])
-        fig.suptitle("In-plane hub force transmitted to the fuselage over one revolution")
-        paths += _save(fig, out_dir, _page_stem("hub_force_history", page, len(pages)), formats)
+        long_names = [ds[n].attrs.get("long_name", n) for n in names]
+        fig.suptitle(f"{long_names[0] if len(names) == 1 else stem.replace('_', ' ')} "
+                     f"{_over(ds)}")
+        paths += _save(fig, out_dir, _page_stem(stem, page, len(pages)), formats)
     return paths
+
+
+def _results(ds: xr.Dataset, names: list[str], cases: Cases, out_dir: Path,
+             formats: Sequence[str]) -> list[Path]:
+    """Scalar results against the first case dimension, one line per value of the others."""
+    dims = _case_dims(ds)
+    first, others = dims[0], dims[1:]
+    if first == "case":
+        x = np.arange(ds.sizes["case"])
+        ticks = [c[0] for c in cases]
+    else:
+        values = ds[first].values
+        numeric = np.issubdtype(values.dtype, np.number)
+        x = values if numeric else np.arange(values.size)
+        ticks = None if numeric else [_format(v) for v in values]
+    combos = list(itertools.product(*(range(ds.sizes[d]) for d in others)))
+    colors = _colors(len(combos))
+    fig = Figure(figsize=(8, 1.5 + 2.6 * len(names)), layout="constrained")
+    axes = fig.subplots(len(names), 1, sharex=True, squeeze=False)[:, 0]
+    for ax, name in zip(axes, names, strict=True):
+        var = ds[name].where(ds["status"] == STATUS_OK)
+        for combo, color in zip(combos, colors, strict=True):
+            sel = dict(zip(others, combo, strict=True))
+            y = var.isel(sel).transpose(first).values
+            label = ", ".join(f"{d}={_format(ds[d].values[i])}" for d, i in sel.items())
+            ax.plot(x, y, marker="o", color=color, label=label or None)
+        ax.set_ylabel(_axis_label(dict(ds[name].attrs), name), wrap=True)
+        ax.grid(True, alpha=0.3)
+    if ticks is not None:
+        axes[-1].set_xticks(x, ticks, rotation=30 if first == "case" else 0, ha="right"
+                            if first == "case" else "center")
+    axes[-1].set_xlabel("case" if first == "case" else _axis_label(dict(ds[first].attrs),
+                                                                   first))
+    if others:
+        _legend(fig, axes[0])
+    fig.suptitle("Results" + ("" if first == "case" else f" against {first}"))
+    stem = "results" if first == "case" else f"results_vs_{first}"
+    return _save(fig, out_dir, stem, formats)
+
+
+def archive_model(ds: xr.Dataset, path: str | os.PathLike[str] = "archive") -> ModelSpec:
+    """The model of an archive (its ``model`` attribute), for its output declarations.
+
+    Raises
+    ------
+    pipelines.archive.ArchiveError
+        If the file is not a sweep archive or its model cannot be loaded.
+    """
+    from pipelines.sweep import StudyError, resolve_model
+
+    if "status" not in ds or "model" not in ds.attrs:
+        raise ArchiveError(f"{path} is not a sweep archive (no 'status' variable or 'model' "
+                           "attribute); bifilar plot draws the archive.nc of bifilar sweep or "
+                           "bifilar run")
+    try:
+        return resolve_model(str(ds.attrs["model"]))
+    except StudyError as exc:
+        raise ArchiveError(f"{path}: cannot load its model to plot it: {exc}") from exc
+
+
+def _figures(spec: ModelSpec, ds: xr.Dataset) -> dict[str, list[str]]:
+    """Declared figure stems -> the archived outputs drawn in them, in declaration order."""
+    figures: dict[str, list[str]] = {}
+    for name, out in spec.outputs.items():
+        if out.figure is None:
+            continue
+        present = all(c in ds for c in out.components) if out.components else name in ds
+        if present:
+            figures.setdefault(out.figure, []).append(name)
+    return figures
 
 
 def plot_archive(
@@ -301,6 +399,9 @@ def plot_archive(
 ) -> list[Path]:
     """Write the report figures of an archive as PNG and PDF.
 
+    Which figures are drawn follows the model's output declarations (see the module
+    documentation).
+
     Parameters
     ----------
     archive_path
@@ -310,39 +411,58 @@ def plot_archive(
     harmonics
         Harmonic numbers drawn against the first swept parameter when a Cartesian sweep is too
         large for bar charts; default: the two largest non-zero harmonics of each quantity.
+    formats
+        File formats (matplotlib names: ``png``, ``pdf``, ``svg``).
 
     Returns
     -------
     list of pathlib.Path
         The files written (each figure in each format). Figures whose data are absent
-        (e.g. no free bifilar, or every case failed) are skipped.
+        (e.g. no free bifilar) are skipped.
 
     Raises
     ------
     FileNotFoundError
         If the archive does not exist.
     pipelines.archive.ArchiveError
-        If it cannot be read.
+        If it cannot be read, is not a sweep archive, its model cannot be loaded, or no case
+        finished ok (nothing to plot).
     """
     ds = open_archive(archive_path)
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
+    spec = archive_model(ds, archive_path)
     cases = _cases(ds)
     if not any(ok for *_, ok in cases):
-        return []
-    lines = _case_dims(ds) != ("case",) and len(cases) > MAX_BAR_CASES
+        counts = status_counts(ds)
+        raise ArchiveError(
+            f"no case of {archive_path} finished ok ({counts['failed']} failed, "
+            f"{counts['not_run']} not run), nothing to plot; its 'message' variable says why"
+        )
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
     paths: list[Path] = []
-    for name, title in HARMONIC_FIGURES.items():
-        if name not in ds:
-            continue
-        if lines:
-            paths += _harmonic_lines(ds, name, title, out, formats, harmonics)
-        else:
-            paths += _harmonic_bars(ds, name, title, out, formats)
-    if "pin_angle" in ds:
-        paths += _pin_angles(ds, cases, out, formats)
-    if "hub_x_fixed" in ds and "hub_y_fixed" in ds:
-        paths += _orbits(ds, cases, out, formats)
-    if "hub_force_x_fixed" in ds and "hub_force_y_fixed" in ds:
-        paths += _force_history(ds, cases, out, formats)
+    if spec.periodic:
+        lines = _case_dims(ds) != ("case",) and len(cases) > MAX_BAR_CASES
+        for name, decl in spec.outputs.items():
+            if not decl.is_vector or name not in ds:
+                continue
+            title = f"Harmonics of the {decl.long_name}"
+            if lines:
+                paths += _harmonic_lines(ds, name, title, out, formats, harmonics)
+            else:
+                paths += _harmonic_bars(ds, name, title, out, formats)
+    else:
+        scalars = [n for n, o in spec.outputs.items() if o.is_scalar and n in ds]
+        if scalars:
+            paths += _results(ds, scalars, cases, out, formats)
+    for stem, names in _figures(spec, ds).items():
+        decls = {n: spec.outputs[n] for n in names}
+        vectors = {n: d for n, d in decls.items() if d.is_vector}
+        if vectors:
+            paths += _orbits(ds, vectors, stem, cases, out, formats)
+        indexed = [n for n, d in decls.items() if not d.is_vector and len(d.dims) > 1]
+        for name in indexed:
+            paths += _indexed_history(ds, name, stem, cases, out, formats)
+        plain = [n for n, d in decls.items() if not d.is_vector and len(d.dims) == 1]
+        if plain:
+            paths += _histories(ds, plain, stem, cases, out, formats)
     return paths

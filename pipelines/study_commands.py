@@ -1,8 +1,15 @@
-"""`bifilar collar` and `bifilar pendulum`: single validation runs and the paper's figures."""
+"""`bifilar collar` and `bifilar pendulum`: single validation runs and the paper's figures.
+
+Their model options are generated from the models' :class:`~studies.parameters.Param`
+declarations (:func:`param_options`): option name, default, units, meaning and valid range are
+written once, in the study module. Values are checked by the declaration, which answers a bad
+one with one line naming the parameter and its valid range (exit status 2).
+"""
 
 from __future__ import annotations
 
 import os
+from collections.abc import Callable, Collection, Mapping
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Any
@@ -11,7 +18,54 @@ import click
 import numpy as np
 import xarray as xr
 
-from studies.parameters import ParameterError
+from studies import bifilar as pendulum_study
+from studies import collar as collar_study
+from studies.parameters import Param, ParameterError
+
+_CLICK_TYPES: dict[type, Any] = {float: float, int: int, str: str, bool: bool}
+
+
+def option_help(param: Param, note: str = "") -> str:
+    """Help text of a parameter's option: meaning, units and valid range (or choices)."""
+    if param.choices is not None:
+        text = f"{param.long_name}: {param.describe_range()}"
+    else:
+        valid = param.describe_range().removesuffix(f" {param.units}")
+        units = "" if param.units == "1" else f" ({param.units})"
+        text = f"{param.long_name}{units}; valid {valid}"
+    return f"{text}; {note}" if note else text
+
+
+def param_options(parameters: Mapping[str, Param], *, no_default: Collection[str] = (),
+                  notes: Mapping[str, str] | None = None) -> Callable[[Any], Any]:
+    """Decorator adding one click option per declared parameter, in declaration order.
+
+    Parameters
+    ----------
+    parameters
+        The model's declarations; ``name_x`` becomes ``--name-x`` with the declared default
+        (shown in ``--help``), type, and a help text with units and valid range. Values are not
+        range-checked by click: :meth:`studies.parameters.ModelSpec.complete` does it, with one
+        line naming the parameter.
+    no_default
+        Parameters whose option defaults to ``None`` (required, or with a meaning of "not
+        given" handled by the command).
+    notes
+        Extra help text per parameter.
+    """
+    notes = notes or {}
+
+    def decorate(fn: Any) -> Any:
+        for name, param in reversed(list(parameters.items())):
+            given = name not in no_default
+            fn = click.option(
+                "--" + name.replace("_", "-"), name, type=_CLICK_TYPES[param.kind],
+                default=param.default if given else None, show_default=given,
+                help=option_help(param, notes.get(name, "")),
+            )(fn)
+        return fn
+
+    return decorate
 
 
 def _fail(msg: str) -> None:
@@ -125,40 +179,24 @@ def collar_figures(out_dir: Path, steps_per_period: int = 1000, workers: int = 2
 
 
 @click.command()
-@click.option("--curve", type=str, help="curve shape: circle or cycloid")
-@click.option("--theta0", type=float, help="release tangent angle (degree)")
-@click.option("--mass", type=float, default=2.0, show_default=True, help="collar mass (kg)")
-@click.option("--radius", type=float, default=1.0, show_default=True, help="circle radius (m)")
-@click.option("--cycloid-a", "cycloid_a", type=float, default=0.25, show_default=True,
-              help="cycloid constant a (m)")
-@click.option("--inertia", type=float, default=0.0, show_default=True,
-              help="collar polar inertia Ip (kg m2); > 0 is case 2")
-@click.option("--gravity", type=float, default=9.81, show_default=True, help="g (m/s2)")
-@click.option("--scheme", type=str, default="ep", show_default=True, help="ep, ed or galpha")
-@click.option("--steps-per-period", "steps_per_period", type=int, default=1000,
-              show_default=True)
-@click.option("--periods", type=float, default=2.0, show_default=True)
+@param_options(collar_study.PARAMETERS, no_default=("curve", "theta0"),
+               notes={"curve": "required unless --figures",
+                      "theta0": "required unless --figures"})
 @click.option("--out", type=click.Path(dir_okay=False, path_type=Path),
               help="netCDF file for the time histories")
 @click.option("--figures", type=click.Path(file_okay=False, path_type=Path),
               help="reproduce Figs. 11 and 12 into this directory instead")
-def collar(curve, theta0, mass, radius, cycloid_a, inertia, gravity, scheme, steps_per_period,
-           periods, out, figures) -> None:
+def collar(out: Path | None, figures: Path | None, **params: Any) -> None:
     """The paper's validation: a collar sliding on a circle or a cycloid (Figs. 10-12)."""
     if figures is not None:
-        for p in collar_figures(figures, steps_per_period):
+        for p in collar_figures(figures, params["steps_per_period"]):
             click.echo(str(p))
         return
-    missing = [n for n, v in (("--curve", curve), ("--theta0", theta0), ("--out", out))
-               if v is None]
+    missing = [n for n, v in (("--curve", params["curve"]), ("--theta0", params["theta0"]),
+                              ("--out", out)) if v is None]
     if missing:
         _fail(f"missing {', '.join(missing)} (or give --figures DIR)")
-    from studies.collar import SPEC
-
-    ds = _run_and_write(SPEC, dict(curve=curve, theta0=theta0, mass=mass, radius=radius,
-                                   cycloid_a=cycloid_a, inertia=inertia, gravity=gravity,
-                                   scheme=scheme, steps_per_period=steps_per_period,
-                                   periods=periods), out)
+    ds = _run_and_write(collar_study.SPEC, params, out)
     click.echo(f"measured period  {float(ds.period):.9f} s")
     click.echo(f"analytic period  {float(ds.period_analytic):.9f} s")
     click.echo(f"relative error   {float(ds.period_error):.3e}")
@@ -213,55 +251,25 @@ def pendulum_figures(out_dir: Path, base: dict[str, Any], workers: int = 2) -> l
 
 
 @click.command()
-@click.option("--hole", type=str, default="circle", show_default=True,
-              help="circle, cycloid or epicycloid")
-@click.option("--hole-diameter", "hole_diameter", type=float, default=None,
-              help="circular hole diameter D (m); exclusive with --tuning-order")
-@click.option("--tuning-order", "tuning_order", type=float, default=None,
-              help="target small-amplitude order n (default 3)")
-@click.option("--hub-speed", "hub_speed", type=float, default=27.0, show_default=True,
-              help="rad/s")
-@click.option("--arm-radius", "arm_radius", type=float, default=0.40, show_default=True,
-              help="R0 (m)")
-@click.option("--cm-offset", "cm_offset", type=float, default=0.05, show_default=True,
-              help="Rm (m)")
-@click.option("--tuning-mass", "tuning_mass", type=float, default=13.6, show_default=True,
-              help="kg")
-@click.option("--pin-mass", "pin_mass", type=float, default=0.5, show_default=True,
-              help="per pin (kg)")
-@click.option("--pin-diameter", "pin_diameter", type=float, default=0.030, show_default=True,
-              help="m")
-@click.option("--pin-inertia", "pin_inertia", type=float, default=5.6e-5, show_default=True,
-              help="per pin (kg m2)")
-@click.option("--amplitude", type=float, default=None, help="release angle (degree)")
-@click.option("--periods", type=float, default=4.0, show_default=True)
-@click.option("--steps-per-period", "steps_per_period", type=int, default=400,
-              show_default=True)
-@click.option("--scheme", type=str, default="ep", show_default=True, help="ep, ed or galpha")
+@param_options(pendulum_study.PARAMETERS, no_default=("hole_diameter", "tuning_order", "amplitude"),
+               notes={"hole_diameter": "exclusive with --tuning-order",
+                      "tuning_order": "default 3",
+                      "amplitude": "required unless --figures"})
 @click.option("--out", type=click.Path(dir_okay=False, path_type=Path))
 @click.option("--figures", type=click.Path(file_okay=False, path_type=Path),
               help="draw frequency order against amplitude for the three hole shapes")
-def pendulum(hole, hole_diameter, tuning_order, hub_speed, arm_radius, cm_offset, tuning_mass,
-             pin_mass, pin_diameter, pin_inertia, amplitude, periods, steps_per_period, scheme,
-             out, figures) -> None:
+def pendulum(out: Path | None, figures: Path | None, **params: Any) -> None:
     """One bifilar pendulum on a hub spinning at constant speed (Figs. 1, 5-7, Eq. 7)."""
-    from studies.bifilar import SPEC
-
-    if hole_diameter is not None and tuning_order is not None:
+    spec = pendulum_study.SPEC
+    hole_diameter, amplitude = params["hole_diameter"], params.pop("amplitude")
+    if hole_diameter is not None and params["tuning_order"] is not None:
         _fail("give either --hole-diameter or --tuning-order, not both")
-    given = dict(hole=hole, hub_speed=hub_speed, arm_radius=arm_radius, cm_offset=cm_offset,
-                 tuning_mass=tuning_mass, pin_mass=pin_mass, pin_diameter=pin_diameter,
-                 pin_inertia=pin_inertia, periods=periods, steps_per_period=steps_per_period,
-                 scheme=scheme)
-    if hole_diameter is not None:
-        if not hole_diameter > 0:
-            _fail(f"hole_diameter = {hole_diameter:g} m: must be > 0")
-        given["hole_diameter"] = hole_diameter
-    if tuning_order is not None:
-        given["tuning_order"] = tuning_order
+    if hole_diameter is not None and not hole_diameter > 0:
+        _fail(f"hole_diameter = {hole_diameter:g} m: must be > 0")
+    given = {name: value for name, value in params.items() if value is not None}
     try:
         if figures is not None:
-            base = SPEC.complete({**given, "hole": "circle", "amplitude": 1.0})
+            base = spec.complete({**given, "hole": "circle", "amplitude": 1.0})
             for p in pendulum_figures(figures, base):
                 click.echo(str(p))
             return
@@ -270,7 +278,7 @@ def pendulum(hole, hole_diameter, tuning_order, hub_speed, arm_radius, cm_offset
     missing = [n for n, v in (("--amplitude", amplitude), ("--out", out)) if v is None]
     if missing:
         _fail(f"missing {', '.join(missing)} (or give --figures DIR)")
-    ds = _run_and_write(SPEC, {**given, "amplitude": amplitude}, out)
+    ds = _run_and_write(spec, {**given, "amplitude": amplitude}, out)
     click.echo(f"tuning order measured   {float(ds.frequency_order):.6f}")
     click.echo(f"tuning order linear     {float(ds.frequency_order_linear):.6f}")
     jac = ds.jacobi.values

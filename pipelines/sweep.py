@@ -56,13 +56,13 @@ import numpy as np
 import xarray as xr
 
 from pipelines.archive import (
-    RESERVED_NAMES,
     STATUS_FAILED,
     STATUS_OK,
     CaseEntry,
     case_summary,
     consolidate,
     global_attrs,
+    reserved_names,
     stale_temporaries,
     write_case,
 )
@@ -87,7 +87,7 @@ class SweepError(RuntimeError):
 
 
 class ModelFailure(RuntimeError):
-    """The model returned a result marked ``status = "failed"``."""
+    """The model returned a result marked ``status = "failed"`` or ``converged = 0``."""
 
 
 def resolve_model(ref: str) -> ModelSpec:
@@ -318,7 +318,10 @@ def load_study(path: str | os.PathLike[str]) -> Study:
         spec = resolve_model(model_ref)
     except StudyError as exc:
         raise StudyError(f"{src}: {exc}") from exc
-    reserved = sorted(RESERVED_NAMES & set(spec.parameters))
+    if not spec.outputs:
+        raise StudyError(f"{src}: model {spec.name!r} declares no outputs, so nothing would be "
+                         "archived; give its ModelSpec outputs={{name: Output(...)}}")
+    reserved = sorted(reserved_names(spec) & set(spec.parameters))
     if reserved:
         raise StudyError(f"{src}: model {spec.name!r} has parameter(s) {', '.join(reserved)} "
                          "whose names the archive uses for its own variables; rename them")
@@ -421,9 +424,11 @@ def _failure_case(case_id: str, model: str, params: Mapping[str, Any], message: 
 def run_case(model_name: str, params: Mapping[str, Any], case_file: str) -> dict[str, Any]:
     """Run one case and write its case file atomically; the dask task of a sweep.
 
-    Any exception of the model (or a result with ``attrs["status"] == "failed"``) is caught
-    and recorded as a failed case with its message: one bad case must not stop an overnight
-    sweep. Only a small summary travels back to the client; the data stay in the file.
+    Any exception of the model (or a result with ``attrs["status"] == "failed"`` or
+    ``attrs["converged"] == 0``, a simulation that stopped early) is caught and recorded as a
+    failed case with its message: one bad case must not stop an overnight sweep. What the case
+    file keeps is what the model's outputs declare (:func:`pipelines.archive.case_summary`).
+    Only a small summary travels back to the client; the data stay in the file.
 
     Parameters
     ----------
@@ -450,7 +455,10 @@ def run_case(model_name: str, params: Mapping[str, Any], case_file: str) -> dict
         reported = str(result.attrs.get("status", "ok")).lower()
         if reported in ("failed", str(STATUS_FAILED)):
             raise ModelFailure(str(result.attrs.get("message", "model reported failure")))
-        summary = case_summary(result)
+        if not int(result.attrs.get("converged", 1)):
+            raise ModelFailure("simulation did not converge: "
+                               + str(result.attrs.get("message", "no message")))
+        summary = case_summary(result, spec)
     except Exception as exc:
         status, message, tb = STATUS_FAILED, _one_line(exc), traceback.format_exc()
         summary = xr.Dataset()
@@ -627,7 +635,7 @@ def consolidate_study(study: Study | str | os.PathLike[str], out_dir: str | os.P
         coords=coords,
         cases=[CaseEntry(c.index, c.case_id, c.path(out_dir / CASES_DIR)) for c in study.cases],
         constants=constants,
-        attrs=global_attrs(title=study.title, model=study.spec.name, study_text=study.text,
+        attrs=global_attrs(title=study.title, model=study.model_ref, study_text=study.text,
                            command=command),
     )
 

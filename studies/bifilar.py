@@ -41,7 +41,7 @@ from solver.rotations import rotation_about
 from solver.simulation import simulate
 from studies.holes import SHAPES, Geometry, Holes, design
 from studies.measure import period_from_crossings
-from studies.parameters import ModelSpec, Param, ParameterError
+from studies.parameters import ModelSpec, Output, Param, ParameterError
 
 Z = np.array([0.0, 0.0, 1.0])
 
@@ -50,22 +50,35 @@ Z = np.array([0.0, 0.0, 1.0])
 # tuning mass 13.6 kg (30 lb) per bifilar; hole centre on the arm 0.40 m from the hub centre;
 # centre of mass 0.05 m outboard of the mass's hole centre; steel pins 30 mm in diameter,
 # 0.5 kg each (≈ 90 mm long), polar inertia ½ m r² = 5.6e-5 kg·m².
-PARAMETERS: dict[str, Param] = {
+#
+# The bifilar hardware and operating point, declared once: the hub model (studies.hub) uses the
+# same declarations. Ranges are physical plausibility bounds for a rotorcraft bifilar (the
+# geometry itself is checked by studies.holes.design).
+HARDWARE: dict[str, Param] = {
     "hole": Param("circle", "1", "tracking hole shape", choices=SHAPES),
+    "tuning_order": Param(3.0, "1", "target small-amplitude tuning order n = ω/Ω",
+                          minimum=0.5, maximum=10.0),
+    "hub_speed": Param(27.0, "rad s-1", "rotor speed Ω", minimum=1.0, maximum=200.0),
+    "arm_radius": Param(0.40, "m", "R0: hub centre to the hole centre on the support arm",
+                        minimum=0.0, exclusive_minimum=True, maximum=5.0),
+    "cm_offset": Param(0.05, "m", "Rm: tuning mass hole centre to its centre of mass",
+                       minimum=0.0, maximum=1.0),
+    "tuning_mass": Param(13.6, "kg", "tuning mass m_b of one bifilar", minimum=0.0,
+                         exclusive_minimum=True, maximum=500.0),
+    "pin_mass": Param(0.5, "kg", "mass of one pin m_p", minimum=0.0, maximum=50.0),
+    "pin_diameter": Param(0.030, "m", "pin diameter d", minimum=0.0, exclusive_minimum=True,
+                          maximum=0.5),
+    "pin_inertia": Param(5.6e-5, "kg m2", "polar moment of inertia of one pin I_p",
+                         minimum=0.0, maximum=1.0),
+}
+
+PARAMETERS: dict[str, Param] = {
+    "hole": HARDWARE["hole"],
     "hole_diameter": Param(0.0, "m", "circular hole diameter D (0: size from tuning_order)",
                            minimum=0.0),
-    "tuning_order": Param(3.0, "1", "target small-amplitude tuning order n = ω/Ω",
-                          minimum=0.0, exclusive_minimum=True, maximum=50.0),
-    "hub_speed": Param(27.0, "rad s-1", "rotor speed Ω", minimum=0.0, exclusive_minimum=True),
-    "arm_radius": Param(0.40, "m", "R0: hub centre to the hole centre on the support arm",
-                        minimum=0.0, exclusive_minimum=True),
-    "cm_offset": Param(0.05, "m", "Rm: tuning mass hole centre to its centre of mass",
-                       minimum=0.0),
-    "tuning_mass": Param(13.6, "kg", "tuning mass m_b", minimum=0.0, exclusive_minimum=True),
-    "pin_mass": Param(0.5, "kg", "mass of one pin m_p", minimum=0.0),
-    "pin_diameter": Param(0.030, "m", "pin diameter d", minimum=0.0, exclusive_minimum=True),
-    "pin_inertia": Param(5.6e-5, "kg m2", "polar moment of inertia of one pin I_p",
-                         minimum=0.0),
+    **{name: HARDWARE[name] for name in ("tuning_order", "hub_speed", "arm_radius",
+                                         "cm_offset", "tuning_mass", "pin_mass",
+                                         "pin_diameter", "pin_inertia")},
     "amplitude": Param(10.0, "degree", "release angle (pin angle φ for circles; turn of the "
                        "path tangent from the vertex otherwise)", minimum=0.0, maximum=60.0),
     "periods": Param(4.0, "1", "simulated duration in linear periods", minimum=1.0),
@@ -73,6 +86,28 @@ PARAMETERS: dict[str, Param] = {
     "scheme": Param("ep", "1", "time integration scheme", choices=("ep", "ed", "galpha")),
     "pin_damping": Param(0.0, "N m s rad-1", "rolling resistance: torque per relative pin "
                          "rotation rate", minimum=0.0),
+}
+
+# What a run returns; the sweep archive keeps the scalar results and the histories marked
+# ``history`` (whole, per case).
+OUTPUTS: dict[str, Output] = {
+    "time": Output("s", "time", dims=("time",)),
+    "relation": Output("1", "rolling or arc-length relation", dims=("relation",)),
+    "pin_angle": Output("degree", "pin angle (turn of the hole tangent at the contact from the "
+                        "vertex)", history=True, figure="pin_angle_history"),
+    "mass_x": Output("m", "tuning mass centre of mass, hub frame, radial", history=True),
+    "mass_y": Output("m", "tuning mass centre of mass, hub frame, tangential", history=True),
+    "jacobi": Output("J", "Jacobi integral T + V − Ω L_z (energy in the rotating frame; "
+                     "Ω̃ = 2tan(Ωh/2)/h for ep)"),
+    "energy_balance": Output("J", "energy minus the work of the hub driver (constant for ep)"),
+    "rolling_residual": Output("m s-1", "residual of the rolling and arc-length relations as "
+                               "the scheme enforces them: A(q_m)(q_f − q_i)/h for ep, "
+                               "A(q_f) v_f otherwise", dims=("time", "relation")),
+    "constraint_violation": Output("1", "max |C| over holonomic constraints (pins on both "
+                                   "curves)"),
+    "frequency_order": Output("1", "ω/Ω measured from the free response in the rotating frame",
+                              dims=()),
+    "frequency_order_linear": Output("1", "small-amplitude order, Eq. (7)", dims=()),
 }
 
 
@@ -240,36 +275,24 @@ def run(params: dict[str, Any]) -> xr.Dataset:
     t = np.array(rec["t"])
     phi = np.degrees(np.array(rec["phi"]))
     period = period_from_crossings(t, phi, center=0.0) if sim.converged else float("nan")
-    out = xr.Dataset(coords={"time": ("time", t, {"units": "s", "long_name": "time"})})
-    out["pin_angle"] = ("time", phi, {"units": "degree", "long_name": "pin angle (turn of the "
-                                      "hole tangent at the contact from the vertex)"})
-    out["mass_x"] = ("time", np.array(rec["x"]), {"units": "m", "long_name": "tuning mass "
-                                                   "centre of mass, hub frame, radial"})
-    out["mass_y"] = ("time", np.array(rec["y"]), {"units": "m", "long_name": "tuning mass "
-                                                   "centre of mass, hub frame, tangential"})
-    jac = np.array(rec["jacobi"])
-    out["jacobi"] = ("time", jac, {"units": "J", "long_name": "Jacobi integral T + V − Ω L_z "
-                                   "(energy in the rotating frame; Ω̃ = 2tan(Ωh/2)/h for ep)"})
-    out["energy_balance"] = ("time", np.array(rec["balance"]), {
-        "units": "J", "long_name": "energy minus the work of the hub driver (constant for ep)"})
-    roll = np.array(rec["roll"])
-    out = out.assign_coords(relation=[n for g in sysm.nh_groups
-                                      for n in getattr(g, "row_names", [g.name])])
-    out["rolling_residual"] = (("time", "relation"), roll, {
-        "units": "m s-1", "long_name": "residual of the rolling and arc-length relations as the "
-        "scheme enforces them: A(q_m)(q_f − q_i)/h for ep, A(q_f) v_f otherwise"})
-    out["constraint_violation"] = ("time", np.array(rec["viol"]), {
-        "units": "1", "long_name": "max |C| over holonomic constraints (pins on both curves)"})
     order = 2 * np.pi / period / omega if np.isfinite(period) else float("nan")
-    out["frequency_order"] = ((), order, {"units": "1", "long_name": "ω/Ω measured from the "
-                                          "free response in the rotating frame"})
-    out["frequency_order_linear"] = ((), order_lin, {"units": "1", "long_name": "small-amplitude"
-                                                     " order, Eq. (7)"})
-    out.attrs.update({k: v for k, v in p.items()})
-    out.attrs.update({f"hole_{k}": float(v) for k, v in parts.holes.params.items()})
-    out.attrs.update(converged=int(sim.converged), message=sim.message,
-                     solver_seconds=sim.seconds, time_step=h)
-    return out
+    attrs = dict(p)
+    attrs.update({f"hole_{k}": float(v) for k, v in parts.holes.params.items()})
+    attrs.update(converged=int(sim.converged), message=sim.message,
+                 solver_seconds=sim.seconds, time_step=h)
+    return SPEC.dataset({
+        "time": t,
+        "relation": sysm.relation_names,
+        "pin_angle": phi,
+        "mass_x": np.array(rec["x"]),
+        "mass_y": np.array(rec["y"]),
+        "jacobi": np.array(rec["jacobi"]),
+        "energy_balance": np.array(rec["balance"]),
+        "rolling_residual": np.array(rec["roll"]),
+        "constraint_violation": np.array(rec["viol"]),
+        "frequency_order": order,
+        "frequency_order_linear": order_lin,
+    }, attrs)
 
 
 def _check_params(p: dict[str, Any]) -> None:
@@ -280,4 +303,5 @@ def _check_params(p: dict[str, Any]) -> None:
 
 
 SPEC = ModelSpec("pendulum", PARAMETERS, run, _check_params,
-                 description="one bifilar pendulum on a hub spinning at constant speed")
+                 description="one bifilar pendulum on a hub spinning at constant speed",
+                 outputs=OUTPUTS)

@@ -24,7 +24,7 @@ from solver.rotations import rotation_about
 from solver.simulation import simulate
 from studies.analytic import collar_circle_period, collar_cycloid_period
 from studies.measure import period_from_crossings
-from studies.parameters import ModelSpec, Param, ParameterError
+from studies.parameters import ModelSpec, Output, Param, ParameterError
 
 PARAMETERS: dict[str, Param] = {
     "curve": Param("circle", "1", "curve the collar slides on", choices=("circle", "cycloid")),
@@ -40,6 +40,23 @@ PARAMETERS: dict[str, Param] = {
     "scheme": Param("ep", "1", "time integration scheme", choices=("ep", "ed", "galpha")),
     "steps_per_period": Param(1000, "1", "time steps per analytic period", minimum=8),
     "periods": Param(2.0, "1", "simulated duration in analytic periods", minimum=1.0),
+}
+
+
+# What a run returns; the sweep archive keeps the scalar results and the histories marked
+# ``history`` (whole, per case).
+OUTPUTS: dict[str, Output] = {
+    "time": Output("s", "time", dims=("time",)),
+    "theta": Output("degree", "tangent angle of the curve at the collar (from the lowest point)",
+                    history=True, figure="collar_angle"),
+    "s": Output("m", "arc length travelled (Eq. 25)"),
+    "eta": Output("1", "curve parameter"),
+    "energy": Output("J", "total energy"),
+    "energy_error": Output("1", "relative energy change"),
+    "constraint_violation": Output("1", "max |C| (m)"),
+    "period": Output("s", "period measured from the motion", dims=()),
+    "period_analytic": Output("s", "analytic period (Eqs. 8, 26, 27 with errata)", dims=()),
+    "period_error": Output("1", "relative period error", dims=()),
 }
 
 
@@ -98,28 +115,24 @@ def run(params: dict[str, Any]) -> xr.Dataset:
     theta = np.degrees(np.arctan2(tang[:, 1], tang[:, 0]))
     t = ds.time.values
     period = period_from_crossings(t, theta, center=0.0) if sim.converged else float("nan")
-    out = xr.Dataset(coords={"time": ("time", t, {"units": "s", "long_name": "time"})})
-    out["theta"] = ("time", theta, {"units": "degree", "long_name": "tangent angle of the curve "
-                                    "at the collar (from the lowest point)"})
-    out["s"] = ("time", s_arc - s_arc[0] * 0, {"units": "m", "long_name": "arc length travelled "
-                                               "(Eq. 25)"})
-    out["eta"] = ("time", eta, {"units": "1", "long_name": "curve parameter"})
     e = ds.energy.values
-    out["energy"] = ("time", e, {"units": "J", "long_name": "total energy"})
-    out["energy_error"] = ("time", (e - e[0]) / abs(e[0]) if e[0] else e - e[0],
-                           {"units": "1", "long_name": "relative energy change"})
-    out["constraint_violation"] = ("time", ds.constraint_violation.values,
-                                   {"units": "1", "long_name": "max |C| (m)"})
-    out["period"] = ((), period, {"units": "s", "long_name": "period measured from the motion"})
-    out["period_analytic"] = ((), t_ref, {"units": "s", "long_name": "analytic period "
-                                          "(Eqs. 8, 26, 27 with errata)"})
-    out["period_error"] = ((), period / t_ref - 1.0,
-                           {"units": "1", "long_name": "relative period error"})
-    out.attrs.update({k: (str(v) if isinstance(v, bool) else v) for k, v in p.items()})
-    out.attrs.update(converged=int(sim.converged), message=sim.message,
-                     solver_seconds=sim.seconds, time_step=h)
-    return out
+    attrs = {k: (str(v) if isinstance(v, bool) else v) for k, v in p.items()}
+    attrs.update(converged=int(sim.converged), message=sim.message,
+                 solver_seconds=sim.seconds, time_step=h)
+    return SPEC.dataset({
+        "time": t,
+        "theta": theta,
+        "s": s_arc - s_arc[0] * 0,
+        "eta": eta,
+        "energy": e,
+        "energy_error": (e - e[0]) / abs(e[0]) if e[0] else e - e[0],
+        "constraint_violation": ds.constraint_violation.values,
+        "period": period,
+        "period_analytic": t_ref,
+        "period_error": period / t_ref - 1.0,
+    }, attrs)
 
 
 SPEC = ModelSpec("collar", PARAMETERS, run, check,
-                 description="collar sliding on a circle or cycloid (paper Figs. 10-12)")
+                 description="collar sliding on a circle or cycloid (paper Figs. 10-12)",
+                 outputs=OUTPUTS)

@@ -13,15 +13,21 @@ Convention (the paper's Figs. 17–19)::
 
 Coefficients are stored as real floats (cosine and sine), never complex, so they go into netCDF
 unchanged.
+
+Which signals get harmonics, under which names and units, is declared by each model
+(:class:`studies.parameters.Output`): :func:`case_harmonics` follows the declarations.
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import NamedTuple
 
 import numpy as np
 import xarray as xr
 from numpy.typing import ArrayLike, NDArray
+
+from studies.parameters import Output
 
 # Highest harmonic stored in the archive: a 4-bladed rotor's fixed-frame loads are at 4P and 8P,
 # and 8P is where the rotating-frame 7P and 9P meet.
@@ -124,38 +130,33 @@ def harmonics(
     return Harmonics(cos=cos, sin=sin, amplitude=np.hypot(cos, sin))
 
 
-# Harmonic outputs of one case: name -> (fixed-frame x and y source variables, units,
-# long_name). The rotating-frame hub displacement is in the model output, so no frame rotation
-# is done here.
-VECTOR_QUANTITIES: dict[str, tuple[tuple[str, str], str, str]] = {
-    "hub_displacement_rotating": (
-        ("hub_x_rotating", "hub_y_rotating"),
-        "m",
-        "hub in-plane displacement in the rotating frame",
-    ),
-    "hub_displacement_fixed": (
-        ("hub_x_fixed", "hub_y_fixed"),
-        "m",
-        "hub in-plane displacement in the fixed frame",
-    ),
-    "hub_force_fixed": (
-        ("hub_force_x_fixed", "hub_force_y_fixed"),
-        "N",
-        "in-plane hub force transmitted to the fuselage, fixed frame",
-    ),
-    "bifilar_cm_displacement": (
-        ("bifilar_cm_x_fixed", "bifilar_cm_y_fixed"),
-        "m",
-        "displacement of the centre of mass of the bifilar tuning masses, fixed frame",
-    ),
-}
+def vector_quantities(outputs: Mapping[str, Output]) -> dict[str, tuple[tuple[str, str], str, str]]:
+    """The declared in-plane vectors: name -> ((x, y) source histories, units, long_name)."""
+    return {name: (out.components, out.units, out.long_name)
+            for name, out in outputs.items() if out.components is not None}
 
-# Variables a case must contain for its harmonics; the bifilar ones may be absent (a model
-# without absorbers), in which case their harmonics are absent too.
-REQUIRED_VARIABLES = (
-    "hub_x_rotating", "hub_y_rotating", "hub_x_fixed", "hub_y_fixed",
-    "hub_force_x_fixed", "hub_force_y_fixed",
-)
+
+def harmonic_signals(outputs: Mapping[str, Output]) -> dict[str, Output]:
+    """The declared single time histories whose harmonics are archived (name -> declaration)."""
+    return {name: out for name, out in outputs.items()
+            if out.harmonics and out.components is None}
+
+
+def required_variables(outputs: Mapping[str, Output]) -> tuple[str, ...]:
+    """The histories a model result needs for its declared harmonics."""
+    names: list[str] = []
+    for (vx, vy), _, _ in vector_quantities(outputs).values():
+        names += [vx, vy]
+    names += list(harmonic_signals(outputs))
+    return tuple(dict.fromkeys(names))
+
+
+def harmonic_names(outputs: Mapping[str, Output]) -> list[str]:
+    """Names of the harmonic variables :func:`case_harmonics` makes from ``outputs``."""
+    names = [f"{v}{s}" for v in vector_quantities(outputs) for s in ("", "_cos", "_sin")]
+    names += [f"{v}{s}" for v in harmonic_signals(outputs)
+              for s in ("_amplitude", "_cos", "_sin")]
+    return names
 
 
 def recording_layout(ds: xr.Dataset) -> tuple[float, int, int, float]:
@@ -185,7 +186,7 @@ def recording_layout(ds: xr.Dataset) -> tuple[float, int, int, float]:
     if missing or "time" not in ds.coords:
         what = ", ".join([f"attribute {a!r}" for a in missing]
                          + ([] if "time" in ds.coords else ["coordinate 'time'"]))
-        raise ValueError(f"model result lacks {what}; see pipelines.harmonics for the layout")
+        raise ValueError(f"model result lacks {what}; see studies.harmonics for the layout")
     omega = float(ds.attrs["hub_speed"])
     n = int(ds.attrs["samples_per_rev"])
     revs = int(ds.attrs["revolutions"])
@@ -206,38 +207,48 @@ def recording_layout(ds: xr.Dataset) -> tuple[float, int, int, float]:
     return omega, n, revs, omega * float(t[0])
 
 
-def case_harmonics(ds: xr.Dataset, n_max: int = N_MAX) -> xr.Dataset:
-    """Per-rev harmonics of the hub, force, bifilar and pin-angle responses of one case.
+def case_harmonics(ds: xr.Dataset, outputs: Mapping[str, Output],
+                   n_max: int = N_MAX) -> xr.Dataset:
+    """Per-rev harmonics of the declared outputs of one case.
 
     Parameters
     ----------
     ds
-        A model result in the hub layout (see :mod:`studies.registry`): ``time`` (s), attrs
-        ``hub_speed`` (rad/s), ``samples_per_rev``, ``revolutions``, and the variables
-        ``hub_{x,y}_rotating``, ``hub_{x,y}_fixed``, ``hub_force_{x,y}_fixed`` (and, when the
-        model has bifilars, ``bifilar_cm_{x,y}_fixed`` and ``pin_angle(bifilar, time)``).
+        A per-rev periodic model result: ``time`` (s), attrs ``hub_speed`` (rad/s),
+        ``samples_per_rev``, ``revolutions`` (see :func:`recording_layout`), and the time
+        histories that ``outputs`` name for harmonics.
+    outputs
+        The model's declarations (:attr:`studies.parameters.ModelSpec.outputs`). An in-plane
+        vector (``components``) gives its amplitude under its own name and the coefficients as
+        ``<name>_cos`` and ``<name>_sin``, dims ``(direction, harmonic)``; a history declared
+        with ``harmonics=True`` gives ``<name>_amplitude``, ``<name>_cos``, ``<name>_sin`` with
+        its other dimensions in front of ``harmonic`` (e.g. ``(bifilar, harmonic)``). Units are
+        those of the declaration; every variable has ``units`` and ``long_name``.
     n_max
         Highest harmonic.
 
     Returns
     -------
     xarray.Dataset
-        Dimension ``harmonic`` (0..n_max) and ``direction`` (``"x"``, ``"y"``); for each of
-        ``hub_displacement_rotating`` (m), ``hub_displacement_fixed`` (m), ``hub_force_fixed`` (N),
-        ``bifilar_cm_displacement`` (m): the amplitude under that name and the coefficients as
-        ``<name>_cos`` and ``<name>_sin``, dims ``(direction, harmonic)``; and
-        ``pin_angle_amplitude``, ``pin_angle_cos``, ``pin_angle_sin`` (degree), dims
-        ``(bifilar, harmonic)``. Every variable has ``units`` and ``long_name``.
+        Dimension ``harmonic`` (0..n_max), ``direction`` (``"x"``, ``"y"``) if there is a vector,
+        and the other dimensions of the harmonic histories with their coordinates.
 
     Raises
     ------
     ValueError
-        If the time base is inconsistent or a required variable is missing.
+        If the time base is inconsistent, a vector has only one of its components, or the result
+        holds none of the declared harmonic outputs.
     """
     _, n, revs, psi0 = recording_layout(ds)
-    missing = [v for v in REQUIRED_VARIABLES if v not in ds]
-    if missing:
-        raise ValueError(f"model result lacks variable(s) {', '.join(missing)}")
+    vectors = vector_quantities(outputs)
+    signals = harmonic_signals(outputs)
+    partial = [f"{vx}/{vy}" for (vx, vy), _, _ in vectors.values() if (vx in ds) != (vy in ds)]
+    if partial:
+        raise ValueError(f"model result has only one component of {', '.join(partial)}")
+    present = [v for v in required_variables(outputs) if v in ds]
+    if not present:
+        raise ValueError("model result lacks variable(s) "
+                         f"{', '.join(required_variables(outputs)) or '(none declared)'}")
 
     def transform(values: ArrayLike) -> Harmonics:
         return harmonics(values, n, revs, n_max, psi0=psi0, axis=-1)
@@ -249,14 +260,15 @@ def case_harmonics(ds: xr.Dataset, n_max: int = N_MAX) -> xr.Dataset:
                 np.arange(n_max + 1),
                 {"units": "1", "long_name": "harmonic number (cycles per rotor revolution)"},
             ),
-            "direction": (
-                "direction",
-                np.array(["x", "y"]),
-                {"units": "1", "long_name": "in-plane direction of the frame"},
-            ),
         }
     )
-    for name, ((vx, vy), units, long_name) in VECTOR_QUANTITIES.items():
+    if vectors:
+        out = out.assign_coords(direction=(
+            "direction",
+            np.array(["x", "y"]),
+            {"units": "1", "long_name": "in-plane direction of the frame"},
+        ))
+    for name, ((vx, vy), units, long_name) in vectors.items():
         if vx not in ds or vy not in ds:
             continue
         h = transform(np.stack([ds[vx].values, ds[vy].values]))
@@ -270,26 +282,30 @@ def case_harmonics(ds: xr.Dataset, n_max: int = N_MAX) -> xr.Dataset:
                 values,
                 {"units": units, "long_name": f"{long_name}, {what}"},
             )
-    if "pin_angle" in ds:
-        pins = ds["pin_angle"].transpose("bifilar", "time")
-        h = transform(pins.values)
-        units = pins.attrs.get("units", "degree")
+    for name, decl in signals.items():
+        if name not in ds:
+            continue
+        other = tuple(d for d in ds[name].dims if d != "time")
+        var = ds[name].transpose(*other, "time")
+        h = transform(var.values)
         for suffix, values, what in (
             ("_amplitude", h.amplitude, "harmonic amplitude"),
             ("_cos", h.cos, "cosine coefficient"),
             ("_sin", h.sin, "sine coefficient"),
         ):
-            out["pin_angle" + suffix] = (
-                ("bifilar", "harmonic"),
+            out[name + suffix] = (
+                (*other, "harmonic"),
                 values,
-                {"units": units, "long_name": f"bifilar pin angle, {what}"},
+                {"units": decl.units, "long_name": f"{decl.long_name}, {what}"},
             )
-        out = out.assign_coords(
-            bifilar=(
-                "bifilar",
-                np.asarray(pins["bifilar"].values) if "bifilar" in pins.coords
-                else np.arange(pins.sizes["bifilar"]),
-                {"units": "1", "long_name": "bifilar absorber number (0 and 2 are opposite)"},
-            )
-        )
+        for dim in other:
+            if dim in out.coords:
+                continue
+            if dim in ds.coords:
+                coord = ds[dim].variable.copy()
+                coord.attrs = {"units": "1", "long_name": f"{dim} index", **coord.attrs}
+            else:
+                coord = xr.Variable(dim, np.arange(var.sizes[dim]),
+                                    {"units": "1", "long_name": f"{dim} index"})
+            out = out.assign_coords({dim: coord})
     return out

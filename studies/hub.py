@@ -35,9 +35,9 @@ from solver.joints import Orientation, Planar, Revolute
 from solver.model import Model
 from solver.system import System
 from solver.timefunctions import linear
-from studies.bifilar import BifilarParts, add_bifilar, pin_angle
-from studies.holes import SHAPES, Geometry, design
-from studies.parameters import ModelSpec, Param, ParameterError
+from studies.bifilar import HARDWARE, BifilarParts, add_bifilar, pin_angle
+from studies.holes import Geometry, design
+from studies.parameters import ModelSpec, Output, Param, ParameterError
 
 Z = np.array([0.0, 0.0, 1.0])
 N_BIFILARS = 4
@@ -51,10 +51,9 @@ NEWTON_TOL = 1e-11  # relative Newton tolerance on q (m); see run()
 PARAMETERS: dict[str, Param] = {
     "bifilar": Param("free", "1", "bifilar tuning masses free or locked to the hub",
                      choices=("free", "locked")),
-    "tuning_order": Param(3.0, "1", "bifilar small-amplitude tuning order n", minimum=0.5,
-                          maximum=10.0),
-    "hole": Param("circle", "1", "tracking hole shape", choices=SHAPES),
-    "hub_speed": Param(27.0, "rad s-1", "rotor speed Ω", minimum=1.0, maximum=200.0),
+    "tuning_order": HARDWARE["tuning_order"],
+    "hole": HARDWARE["hole"],
+    "hub_speed": HARDWARE["hub_speed"],
     "fuselage_stiffness_scale": Param(1.0, "1", "scale on the nominal fuselage stiffness",
                                       minimum=0.0, exclusive_minimum=True, maximum=100.0),
     "fuselage_stiffness": Param(1.015e7, "N m-1", "nominal in-plane fuselage stiffness at the "
@@ -71,12 +70,8 @@ PARAMETERS: dict[str, Param] = {
                            minimum=0.0),
     "phase_3p": Param(0.0, "degree", "phase of the 3P hub shear"),
     "phase_5p": Param(0.0, "degree", "phase of the 5P hub shear"),
-    "arm_radius": Param(0.40, "m", "bifilar R0", minimum=0.0, exclusive_minimum=True),
-    "cm_offset": Param(0.05, "m", "bifilar Rm", minimum=0.0),
-    "tuning_mass": Param(13.6, "kg", "bifilar tuning mass", minimum=0.0, exclusive_minimum=True),
-    "pin_mass": Param(0.5, "kg", "mass of one pin", minimum=0.0),
-    "pin_diameter": Param(0.030, "m", "pin diameter", minimum=0.0, exclusive_minimum=True),
-    "pin_inertia": Param(5.6e-5, "kg m2", "polar inertia of one pin", minimum=0.0),
+    **{name: HARDWARE[name] for name in ("arm_radius", "cm_offset", "tuning_mass", "pin_mass",
+                                         "pin_diameter", "pin_inertia")},
     "pin_damping_ratio": Param(0.01, "1", "pendulum damping ratio from rolling resistance",
                                minimum=0.0, maximum=0.5),
     "steps_per_rev": Param(160, "1", "time steps per revolution", minimum=64, maximum=20000),
@@ -87,6 +82,39 @@ PARAMETERS: dict[str, Param] = {
     "periodic_tolerance": Param(1e-3, "1", "max change of harmonics between successive "
                                 "revolutions, relative to the largest", minimum=0.0,
                                 exclusive_minimum=True, maximum=1.0),
+}
+
+
+# What a run returns: whole revolutions of time histories. The in-plane vectors (components)
+# get their per-rev harmonics archived; the histories marked ``history`` are archived over the
+# last revolution; ``figure`` names the report figure that draws them (pipelines.plots).
+OUTPUTS: dict[str, Output] = {
+    "time": Output("s", "time", dims=("time",)),
+    "bifilar": Output("1", "bifilar absorber number (0 and 2 are opposite)", dims=("bifilar",)),
+    "hub_x_fixed": Output("m", "hub in-plane displacement x, fixed frame", history=True),
+    "hub_y_fixed": Output("m", "hub in-plane displacement y, fixed frame", history=True),
+    "hub_x_rotating": Output("m", "hub in-plane displacement along the rotating x axis"),
+    "hub_y_rotating": Output("m", "hub in-plane displacement along the rotating y axis"),
+    "hub_force_x_fixed": Output("N", "in-plane force transmitted to the fuselage, x",
+                                history=True, figure="hub_force_history"),
+    "hub_force_y_fixed": Output("N", "in-plane force transmitted to the fuselage, y",
+                                history=True, figure="hub_force_history"),
+    "bifilar_cm_x_fixed": Output("m", "centre of mass of the 4 tuning masses, x", history=True),
+    "bifilar_cm_y_fixed": Output("m", "centre of mass of the 4 tuning masses, y", history=True),
+    "pin_angle": Output("degree", "pin angle of each bifilar", dims=("bifilar", "time"),
+                        history=True, harmonics=True, figure="pin_angles"),
+    "hub_displacement_rotating": Output(
+        "m", "hub in-plane displacement in the rotating frame",
+        components=("hub_x_rotating", "hub_y_rotating")),
+    "hub_displacement_fixed": Output(
+        "m", "hub in-plane displacement in the fixed frame",
+        components=("hub_x_fixed", "hub_y_fixed"), figure="orbits"),
+    "hub_force_fixed": Output(
+        "N", "in-plane hub force transmitted to the fuselage, fixed frame",
+        components=("hub_force_x_fixed", "hub_force_y_fixed")),
+    "bifilar_cm_displacement": Output(
+        "m", "displacement of the centre of mass of the bifilar tuning masses, fixed frame",
+        components=("bifilar_cm_x_fixed", "bifilar_cm_y_fixed"), figure="orbits"),
 }
 
 
@@ -227,25 +255,19 @@ def run(params: dict[str, Any]) -> xr.Dataset:
     t = data[:, 0]
     psi = omega * t
     cs, sn = np.cos(psi), np.sin(psi)
-    ds = xr.Dataset(coords={"time": ("time", t, {"units": "s", "long_name": "time"}),
-                            "bifilar": ("bifilar", np.arange(N_BIFILARS),
-                                        {"long_name": "bifilar index (0 and 2 opposite)"})})
-
-    def put(name, val, units, long_name, dims=("time",)):
-        ds[name] = (dims, val, {"units": units, "long_name": long_name})
-
-    put("hub_x_fixed", data[:, 1], "m", "hub in-plane displacement x, fixed frame")
-    put("hub_y_fixed", data[:, 2], "m", "hub in-plane displacement y, fixed frame")
-    put("hub_x_rotating", cs * data[:, 1] + sn * data[:, 2], "m",
-        "hub in-plane displacement along the rotating x axis")
-    put("hub_y_rotating", -sn * data[:, 1] + cs * data[:, 2], "m",
-        "hub in-plane displacement along the rotating y axis")
-    put("hub_force_x_fixed", data[:, 3], "N", "in-plane force transmitted to the fuselage, x")
-    put("hub_force_y_fixed", data[:, 4], "N", "in-plane force transmitted to the fuselage, y")
-    put("bifilar_cm_x_fixed", data[:, 5], "m", "centre of mass of the 4 tuning masses, x")
-    put("bifilar_cm_y_fixed", data[:, 6], "m", "centre of mass of the 4 tuning masses, y")
-    put("pin_angle", data[:, 7:].T, "degree", "pin angle of each bifilar",
-        dims=("bifilar", "time"))
+    ds = SPEC.dataset({
+        "time": t,
+        "bifilar": np.arange(N_BIFILARS),
+        "hub_x_fixed": data[:, 1],
+        "hub_y_fixed": data[:, 2],
+        "hub_x_rotating": cs * data[:, 1] + sn * data[:, 2],
+        "hub_y_rotating": -sn * data[:, 1] + cs * data[:, 2],
+        "hub_force_x_fixed": data[:, 3],
+        "hub_force_y_fixed": data[:, 4],
+        "bifilar_cm_x_fixed": data[:, 5],
+        "bifilar_cm_y_fixed": data[:, 6],
+        "pin_angle": data[:, 7:].T,
+    })
     ds.attrs.update(hub_speed=float(omega), revolutions=int(p["revolutions"]),
                     samples_per_rev=int(nrev), transient_revolutions=int(transient),
                     tuning_order_linear=float(holes.order_linear),
@@ -263,4 +285,5 @@ def _check(p: dict[str, Any]) -> None:
 
 
 SPEC = ModelSpec("hub", PARAMETERS, run, _check,
-                 description="four-bladed hub with four bifilars on a fuselage restraint")
+                 description="four-bladed hub with four bifilars on a fuselage restraint",
+                 outputs=OUTPUTS)

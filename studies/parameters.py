@@ -1,8 +1,15 @@
-"""Declared model parameters: one place per parameter, with its unit, meaning and valid range.
+"""Declared model inputs and outputs: one place per quantity, with its unit and meaning.
 
 Every study declares its inputs as :class:`Param` objects. The same declaration validates
 command-line and study-file input (with a message that names the parameter, the value and the
-valid range) and becomes the ``units``/``long_name`` attributes of the archived variables.
+valid range), generates the command-line options of the single-model commands, and becomes the
+``units``/``long_name`` attributes of the archived variables.
+
+Every study declares its results as :class:`Output` objects (name, units, long_name,
+dimensions, and what the archive keeps of it). The run function fills its dataset through the
+declarations (:func:`output_dataset`), and the sweep pipeline generates the archive layout,
+the per-rev harmonics and the report figures from them (:mod:`pipelines.archive`,
+:mod:`studies.harmonics`, :mod:`pipelines.plots`).
 """
 
 from __future__ import annotations
@@ -12,7 +19,9 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
+import numpy as np
 import xarray as xr
+from numpy.typing import ArrayLike
 
 
 class ParameterError(ValueError):
@@ -101,11 +110,143 @@ class Param:
         return {"units": self.units, "long_name": self.long_name}
 
 
+class OutputError(ValueError):
+    """A model filled an output it did not declare, or with the wrong shape (a bug)."""
+
+
+@dataclass(frozen=True)
+class Output:
+    """A declared model result.
+
+    Parameters
+    ----------
+    units
+        UDUNITS string of the values, ``"1"`` for dimensionless.
+    long_name
+        Human-readable meaning; becomes the ``long_name`` attribute in every file.
+    dims
+        Dimension names of the values: ``()`` for a scalar result, ``("time",)`` for a time
+        history, e.g. ``("bifilar", "time")`` for one history per absorber. A declaration whose
+        ``dims`` is its own name alone (``"time": Output("s", "time", dims=("time",))``) is a
+        coordinate.
+    history
+        Keep the time history in the sweep archive: the last recorded revolution (dimension
+        ``time_in_rev``) for a per-rev periodic model, the whole history (dimension ``sample``)
+        otherwise. Scalar results (``dims == ()``) are always archived.
+    harmonics
+        Archive the per-rev harmonics of this time history as ``<name>_amplitude``,
+        ``<name>_cos`` and ``<name>_sin`` (its other dimensions kept, ``harmonic`` last). A model
+        with any harmonic output is per-rev periodic (see :mod:`studies.harmonics`).
+    components
+        For an in-plane vector: the names of its declared x and y time histories. The vector is
+        derived, never filled by the model: the archive holds its per-rev harmonics as
+        ``<name>`` (amplitude), ``<name>_cos`` and ``<name>_sin`` with dimensions
+        ``(direction, harmonic)``. ``units`` must be the components' units.
+    figure
+        Stem of the report figure in which :func:`pipelines.plots.plot_archive` draws this output
+        (``None``: not drawn as a history; it must be archived, ``history=True``, or a vector of
+        archived components). A vector is drawn as an orbit, a history with an extra dimension
+        as one panel per case, any other history as one panel per output with one line per
+        case. Every vector of a periodic model also gets its harmonic chart
+        ``harmonics_<name>``; a non-periodic model gets its scalar results against its sweep.
+    """
+
+    units: str
+    long_name: str
+    dims: tuple[str, ...] = ("time",)
+    history: bool = False
+    harmonics: bool = False
+    components: tuple[str, str] | None = None
+    figure: str | None = None
+
+    @property
+    def is_scalar(self) -> bool:
+        return self.components is None and not self.dims
+
+    @property
+    def is_vector(self) -> bool:
+        return self.components is not None
+
+    def attrs(self) -> dict[str, str]:
+        return {"units": self.units, "long_name": self.long_name}
+
+
+def check_outputs(outputs: Mapping[str, Output]) -> None:
+    """Raise :class:`OutputError` if a set of declarations is inconsistent."""
+    for name, out in outputs.items():
+        if out.components is None:
+            if out.harmonics and "time" not in out.dims:
+                raise OutputError(f"output {name!r}: harmonics need a 'time' dimension")
+            continue
+        if len(out.components) != 2:
+            raise OutputError(f"output {name!r}: a vector has two components (x, y)")
+        for comp in out.components:
+            decl = outputs.get(comp)
+            if decl is None or decl.is_vector or decl.dims != ("time",):
+                raise OutputError(f"output {name!r}: component {comp!r} must be a declared "
+                                  "time history with dims ('time',)")
+            if decl.units != out.units:
+                raise OutputError(f"output {name!r} has units {out.units!r} but its component "
+                                  f"{comp!r} has {decl.units!r}")
+
+
+def output_dataset(outputs: Mapping[str, Output], values: Mapping[str, ArrayLike],
+                   attrs: Mapping[str, Any] | None = None, *,
+                   partial: bool = False) -> xr.Dataset:
+    """A model result filled through its output declarations.
+
+    Parameters
+    ----------
+    outputs
+        The model's declarations (name -> :class:`Output`).
+    values
+        Name -> values (in the declared units, shaped as the declared ``dims``). Declarations
+        that are coordinates (``dims == (name,)``) become coordinates.
+    attrs
+        Global attributes of the result (run information such as ``converged``).
+    partial
+        Allow declared outputs to be absent (e.g. a model variant without absorbers).
+
+    Returns
+    -------
+    xarray.Dataset
+        Every variable with the ``units`` and ``long_name`` of its declaration.
+
+    Raises
+    ------
+    OutputError
+        For an undeclared name, a derived (vector) output, values whose number of dimensions
+        differs from the declaration, or (unless ``partial``) a declared output left out.
+    """
+    undeclared = sorted(set(values) - set(outputs))
+    if undeclared:
+        raise OutputError(f"undeclared output(s) {', '.join(undeclared)}; declared: "
+                          f"{', '.join(outputs)}")
+    coords: dict[str, xr.Variable] = {}
+    data: dict[str, xr.Variable] = {}
+    for name, value in values.items():
+        decl = outputs[name]
+        if decl.is_vector:
+            raise OutputError(f"output {name!r} is derived from {decl.components}; fill those")
+        arr = np.asarray(value)
+        if arr.ndim != len(decl.dims):
+            raise OutputError(f"output {name!r} has {arr.ndim} dimension(s), declared "
+                              f"{decl.dims}")
+        var = xr.Variable(decl.dims, arr, decl.attrs())
+        (coords if decl.dims == (name,) else data)[name] = var
+    if not partial:
+        missing = [n for n, d in outputs.items() if not d.is_vector and n not in values]
+        if missing:
+            raise OutputError(f"declared output(s) not filled: {', '.join(missing)}")
+    return xr.Dataset(data, coords=coords, attrs=dict(attrs or {}))
+
+
 @dataclass(frozen=True)
 class ModelSpec:
-    """A study that the pipeline can run: its parameters and its run function.
+    """A study that the pipeline can run: its parameters, its outputs and its run function.
 
-    ``run(params) -> xarray.Dataset`` takes a complete, validated parameter dict.
+    ``run(params) -> xarray.Dataset`` takes a complete, validated parameter dict and returns
+    the declared ``outputs`` (filled with :func:`output_dataset`).
     ``check(params)`` raises :class:`ParameterError` for combinations that are individually
     valid but physically impossible (e.g. a pin wider than its hole); it runs before any case.
     """
@@ -116,6 +257,20 @@ class ModelSpec:
     check: Callable[[dict[str, Any]], None] | None = None
     description: str = ""
     extra: dict[str, Any] = field(default_factory=dict)
+    outputs: Mapping[str, Output] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        check_outputs(self.outputs)
+
+    @property
+    def periodic(self) -> bool:
+        """Whether the model records whole rotor revolutions (it has per-rev harmonics)."""
+        return any(o.harmonics or o.is_vector for o in self.outputs.values())
+
+    def dataset(self, values: Mapping[str, ArrayLike], attrs: Mapping[str, Any] | None = None,
+                *, partial: bool = False) -> xr.Dataset:
+        """:func:`output_dataset` with this model's declarations."""
+        return output_dataset(self.outputs, values, attrs, partial=partial)
 
     def complete(self, given: Mapping[str, Any]) -> dict[str, Any]:
         """Defaults filled in, every value type- and range-checked, cross-checks applied."""

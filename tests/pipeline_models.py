@@ -30,7 +30,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from studies.parameters import ModelSpec, Param, ParameterError
+from studies.parameters import ModelSpec, Output, Param, ParameterError
 from studies.registry import register
 
 HUB_MASS = 500.0  # kg, hub and rotor in-plane effective mass
@@ -62,6 +62,34 @@ PARAMETERS: dict[str, Param] = {
     "delay": Param(0.0, "s", "wall-clock delay of a run (tests)", minimum=0.0, maximum=60.0),
     "run_log": Param("", "1", "file to which each run appends a line (tests)"),
     "fail": Param("none", "1", "test failure mode", choices=("none", "raise", "report")),
+}
+
+
+# The hub model's output layout (names, dimensions, harmonics, archived histories, figures).
+OUTPUTS: dict[str, Output] = {
+    "time": Output("s", "time", dims=("time",)),
+    "bifilar": Output("1", "bifilar number", dims=("bifilar",)),
+    "hub_x_fixed": Output("m", "hub x displacement, fixed frame", history=True),
+    "hub_y_fixed": Output("m", "hub y displacement, fixed frame", history=True),
+    "hub_x_rotating": Output("m", "hub x displacement, rotating frame"),
+    "hub_y_rotating": Output("m", "hub y displacement, rotating frame"),
+    "hub_force_x_fixed": Output("N", "hub force x, fixed frame", history=True,
+                                figure="hub_force_history"),
+    "hub_force_y_fixed": Output("N", "hub force y, fixed frame", history=True,
+                                figure="hub_force_history"),
+    "bifilar_cm_x_fixed": Output("m", "bifilar centre of mass x, fixed frame", history=True),
+    "bifilar_cm_y_fixed": Output("m", "bifilar centre of mass y, fixed frame", history=True),
+    "pin_angle": Output("degree", "bifilar pin angle", dims=("bifilar", "time"), history=True,
+                        harmonics=True, figure="pin_angles"),
+    "hub_displacement_rotating": Output("m", "hub in-plane displacement, rotating frame",
+                                        components=("hub_x_rotating", "hub_y_rotating")),
+    "hub_displacement_fixed": Output("m", "hub in-plane displacement, fixed frame",
+                                     components=("hub_x_fixed", "hub_y_fixed"), figure="orbits"),
+    "hub_force_fixed": Output("N", "in-plane hub force on the fuselage, fixed frame",
+                              components=("hub_force_x_fixed", "hub_force_y_fixed")),
+    "bifilar_cm_displacement": Output("m", "bifilar centre of mass displacement, fixed frame",
+                                      components=("bifilar_cm_x_fixed", "bifilar_cm_y_fixed"),
+                                      figure="orbits"),
 }
 
 
@@ -173,32 +201,22 @@ def run(params: dict[str, Any]) -> xr.Dataset:
     bifilar_psi = psi[None, :] + np.arange(N_BIFILARS)[:, None] * np.pi / 2
     pins = np.degrees((-rx * np.sin(bifilar_psi) + ry * np.cos(bifilar_psi)) / length)
 
-    def var(values: np.ndarray, units: str, long_name: str, dims: Any = "time") -> Any:
-        return (dims, values, {"units": units, "long_name": long_name})
-
-    ds = xr.Dataset(
+    ds = SPEC.dataset(
         {
-            "hub_x_fixed": var(hx, "m", "hub x displacement, fixed frame"),
-            "hub_y_fixed": var(hy, "m", "hub y displacement, fixed frame"),
-            "hub_x_rotating": var(hx * np.cos(psi) + hy * np.sin(psi), "m",
-                                  "hub x displacement, rotating frame"),
-            "hub_y_rotating": var(-hx * np.sin(psi) + hy * np.cos(psi), "m",
-                                  "hub y displacement, rotating frame"),
-            "hub_force_x_fixed": var(series["force_x"], "N", "hub force x, fixed frame"),
-            "hub_force_y_fixed": var(series["force_y"], "N", "hub force y, fixed frame"),
-            "bifilar_cm_x_fixed": var(series["absorber_x"], "m",
-                                      "bifilar centre of mass x, fixed frame"),
-            "bifilar_cm_y_fixed": var(series["absorber_y"], "m",
-                                      "bifilar centre of mass y, fixed frame"),
-            "pin_angle": var(pins, "degree", "bifilar pin angle", ("bifilar", "time")),
+            "time": t,
+            "bifilar": np.arange(N_BIFILARS),
+            "hub_x_fixed": hx,
+            "hub_y_fixed": hy,
+            "hub_x_rotating": hx * np.cos(psi) + hy * np.sin(psi),
+            "hub_y_rotating": -hx * np.sin(psi) + hy * np.cos(psi),
+            "hub_force_x_fixed": series["force_x"],
+            "hub_force_y_fixed": series["force_y"],
+            "bifilar_cm_x_fixed": series["absorber_x"],
+            "bifilar_cm_y_fixed": series["absorber_y"],
+            "pin_angle": pins,
         },
-        coords={
-            "time": ("time", t, {"units": "s", "long_name": "time"}),
-            "bifilar": ("bifilar", np.arange(N_BIFILARS),
-                        {"units": "1", "long_name": "bifilar number"}),
-        },
-        attrs={"hub_speed": omega, "revolutions": revs, "samples_per_rev": n,
-               "transient_revolutions": skip},
+        {"hub_speed": omega, "revolutions": revs, "samples_per_rev": n,
+         "transient_revolutions": skip},
     )
     if params["fail"] == "report":
         ds.attrs.update(status="failed", message="solver did not converge (test report)")
@@ -211,5 +229,6 @@ SPEC = ModelSpec(
     run=run,
     check=check,
     description="hub on a fuselage spring with a tuned absorber, exact steady state",
+    outputs=OUTPUTS,
 )
 register(SPEC)

@@ -36,7 +36,7 @@ from pipelines.archive import (
     read_case,
     write_case,
 )
-from pipelines.harmonics import N_MAX, case_harmonics, harmonics
+from studies.harmonics import N_MAX, case_harmonics, harmonics
 from pipelines.plots import plot_archive
 from pipelines.sweep import (
     StudyError,
@@ -143,7 +143,7 @@ def test_case_harmonics_and_summary_against_closed_form():
             for k, amp in models.steady_state(params).items()
         )
 
-    h = case_harmonics(ds)
+    h = case_harmonics(ds, models.SPEC.outputs)
     assert dict(h.sizes) == {"harmonic": N_MAX + 1, "direction": 2, "bifilar": 4}
     for name, var in h.variables.items():
         assert var.attrs.get("units") and var.attrs.get("long_name"), name
@@ -161,7 +161,7 @@ def test_case_harmonics_and_summary_against_closed_form():
     np.testing.assert_allclose(h["pin_angle_cos"][2], -h["pin_angle_cos"][0], atol=1e-12)
     assert h["pin_angle_amplitude"].sel(bifilar=0, harmonic=3) > 1.0
 
-    h_late = case_harmonics(later)
+    h_late = case_harmonics(later, models.SPEC.outputs)
     for name in ("hub_displacement_fixed", "hub_force_fixed"):
         tol = EXACT * 1e3 * float(np.abs(h[f"{name}_cos"]).max())
         np.testing.assert_allclose(h_late[f"{name}_cos"].sel(direction="x"),
@@ -169,7 +169,7 @@ def test_case_harmonics_and_summary_against_closed_form():
         np.testing.assert_allclose(h_late[f"{name}_sin"].sel(direction="x"),
                                    h[f"{name}_sin"].sel(direction="x"), atol=tol)
 
-    summary = case_summary(later)
+    summary = case_summary(later, models.SPEC)
     n = params["samples_per_rev"]
     assert summary.sizes["time_in_rev"] == n
     np.testing.assert_allclose(summary["psi"], 360.0 * np.arange(n) / n)
@@ -183,7 +183,7 @@ def test_case_harmonics_refuses_non_uniform_time():
     t = ds["time"].values.copy()
     t[5] += 1e-4
     with pytest.raises(ValueError, match="not uniform"):
-        case_harmonics(ds.assign_coords(time=t))
+        case_harmonics(ds.assign_coords(time=t), models.SPEC.outputs)
 
 
 # --- case files ---------------------------------------------------------------------------------
@@ -513,8 +513,13 @@ def test_cli_run_sweeps_and_plots(scheduler, tmp_path, monkeypatch):
     monkeypatch.setattr(cli, "default_study", lambda: study)
     result = CliRunner().invoke(cli.main, ["run", "--out", str(tmp_path / "res"),
                                            "--scheduler", scheduler])
-    assert result.exit_code == 0, result.output
+    # one case of four fails: exit status 1, the last line says how many and where to look
+    assert result.exit_code == 1, result.output
     assert "[4/4] case" in result.stderr and "failed" in result.stderr
+    last = result.stderr.strip().splitlines()[-1]
+    assert last.startswith("error: 1 of 4 case(s) not ok (1 failed, 0 not run)"), last
+    assert "'message' variable" in last and "archive.nc" in last
+    assert "Traceback" not in result.output
     assert (tmp_path / "res" / "archive.nc").exists()
     # the figures of a case list (bars, Figs. 14-19), as PNG and PDF
     paths = [Path(line) for line in result.stdout.splitlines()[1:]]
@@ -559,3 +564,157 @@ def test_default_study_is_table_1(tmp_path):
 def test_default_study_validates_on_the_hub_model():
     study = load_study(DEFAULT_STUDY)
     assert len(study.cases) == 4
+
+
+# --- outputs declared once: every registered model sweeps end to end ---------------------------
+
+PENDULUM_STUDY = """model = "pendulum"
+title = "pendulum amplitude sweep"
+[fixed]
+periods = 2.0
+steps_per_period = 40
+[sweep]
+amplitude = [5.0, 20.0]
+"""
+
+COLLAR_STUDY = """model = "collar"
+title = "collar release sweep"
+[fixed]
+periods = 2.0
+steps_per_period = 100
+[sweep]
+theta0 = [20.0, 60.0]
+"""
+
+
+def assert_declared(ds: xr.Dataset, spec) -> None:
+    """Every archive variable carries units and long_name; declared ones carry their own."""
+    for name, var in ds.variables.items():
+        assert var.attrs.get("units"), f"{name} has no units"
+        assert var.attrs.get("long_name"), f"{name} has no long_name"
+    for name, out in spec.outputs.items():
+        if name in ds:
+            assert ds[name].attrs["units"] == out.units, name
+            assert ds[name].attrs["long_name"] == out.long_name, name
+
+
+def test_pendulum_study_sweeps_end_to_end(scheduler, tmp_path):
+    from studies.bifilar import SPEC
+
+    study = tmp_path / "pendulum.toml"
+    study.write_text(PENDULUM_STUDY)
+    result = CliRunner().invoke(cli.main, ["sweep", str(study), "--out", str(tmp_path / "out"),
+                                           "--scheduler", scheduler])
+    assert result.exit_code == 0, result.output
+    with xr.open_dataset(result.stdout.strip()) as ds:
+        assert (ds["status"] == STATUS_OK).all(), ds["message"].values
+        assert ds.attrs["model"] == "pendulum"
+        assert_declared(ds, SPEC)
+        assert ds["frequency_order"].dims == ("amplitude",)
+        assert ds["frequency_order_linear"].attrs["units"] == "1"
+        for name in ("pin_angle", "mass_x", "mass_y", "time"):
+            assert ds[name].dims == ("amplitude", "sample"), name
+        assert ds["time"].attrs["units"] == "s"
+        # nothing of the hub layout
+        assert "harmonic" not in ds.dims and "run_samples_per_rev" not in ds
+        order = ds["frequency_order"].values
+        lin = float(ds["frequency_order_linear"].isel(amplitude=0))
+        # circular holes soften with amplitude (π/(2K(sin A/2)): -0.05 % at 5°, -0.8 % at 20°)
+        assert order[1] < order[0] and abs(order[0] / lin - 1) < 5e-3
+        np.testing.assert_allclose(ds["pin_angle"].isel(sample=0), [5.0, 20.0], rtol=1e-9)
+    paths = plot_archive(tmp_path / "out" / "archive.nc", tmp_path / "plots", formats=("png",))
+    assert {p.name for p in paths} == {"results_vs_amplitude.png", "pin_angle_history.png"}
+
+
+def test_collar_study_sweeps_end_to_end(scheduler, tmp_path):
+    from studies.collar import SPEC
+
+    study = tmp_path / "collar.toml"
+    study.write_text(COLLAR_STUDY)
+    result = CliRunner().invoke(cli.main, ["sweep", str(study), "--out", str(tmp_path / "out"),
+                                           "--scheduler", scheduler, "--quiet"])
+    assert result.exit_code == 0, result.output
+    with xr.open_dataset(result.stdout.strip()) as ds:
+        assert (ds["status"] == STATUS_OK).all(), ds["message"].values
+        assert_declared(ds, SPEC)
+        for name in ("period", "period_analytic", "period_error"):
+            assert ds[name].dims == ("theta0",), name
+        assert ds["period"].attrs["units"] == "s"
+        assert ds["theta"].dims == ("theta0", "sample")
+        # 100 steps per period: the period within the scheme's phase error, (2π/100)²/12 ≈ 3e-4
+        assert float(abs(ds["period_error"]).max()) < 1e-3
+        # the longer period of the larger release gives the same number of samples
+        assert int(ds["time"].notnull().sum()) == 2 * ds.sizes["sample"]
+    paths = plot_archive(tmp_path / "out" / "archive.nc", tmp_path / "plots", formats=("png",))
+    assert {p.name for p in paths} == {"results_vs_theta0.png", "collar_angle.png"}
+
+
+@pytest.mark.parametrize("name", ["pendulum_study.toml", "collar_study.toml"])
+def test_example_studies_validate(name):
+    study = load_study(REPO / "studies" / name)
+    assert study.cases and study.spec.outputs
+
+
+def test_sweep_with_failed_cases_exits_1(scheduler, tmp_path):
+    study = write_study(tmp_path / "s.toml", CASES_STUDY)
+    result = CliRunner().invoke(cli.main, ["sweep", str(study), "--out", str(tmp_path / "out"),
+                                           "--scheduler", scheduler])
+    assert result.exit_code == 1, result.output
+    assert Path(result.stdout.strip()).name == "archive.nc"
+    last = result.stderr.strip().splitlines()[-1]
+    assert last.startswith("error: 1 of 4 case(s) not ok (1 failed, 0 not run)"), last
+    assert str(tmp_path / "out" / "archive.nc") in last and "cases" in last
+
+
+def test_plot_refuses_archive_without_ok_case(scheduler, tmp_path):
+    study = write_study(tmp_path / "s.toml", '[sweep]\nfail = ["raise"]\n')
+    runner = CliRunner()
+    result = runner.invoke(cli.main, ["sweep", str(study), "--out", str(tmp_path / "out"),
+                                      "--scheduler", scheduler, "--quiet"])
+    assert result.exit_code == 1, result.output
+    line = error_line(runner.invoke(cli.main, ["plot", str(tmp_path / "out" / "archive.nc"),
+                                               "--out", str(tmp_path / "plots")]))
+    assert "no case" in line and "1 failed" in line
+    # a case file is not an archive
+    case = next((tmp_path / "out" / "cases").glob("*.nc"))
+    line = error_line(runner.invoke(cli.main, ["plot", str(case), "--out",
+                                               str(tmp_path / "plots")]))
+    assert "not a sweep archive" in line
+
+
+def test_outputs_are_filled_only_through_declarations():
+    from studies.parameters import ModelSpec, Output, OutputError, output_dataset
+
+    outputs = {"time": Output("s", "time", dims=("time",)),
+               "x": Output("m", "position"),
+               "peak": Output("m", "largest position", dims=())}
+    ds = output_dataset(outputs, {"time": [0.0, 1.0], "x": [0.0, 2.0], "peak": 2.0})
+    assert ds["x"].attrs == {"units": "m", "long_name": "position"}
+    assert "time" in ds.coords and ds["peak"].ndim == 0
+    with pytest.raises(OutputError, match="undeclared output"):
+        output_dataset(outputs, {"time": [0.0], "x": [0.0], "peak": 0.0, "y": [1.0]})
+    with pytest.raises(OutputError, match="not filled: peak"):
+        output_dataset(outputs, {"time": [0.0], "x": [0.0]})
+    with pytest.raises(OutputError, match="dimension"):
+        output_dataset(outputs, {"time": [0.0], "x": [[0.0]], "peak": 0.0})
+    with pytest.raises(OutputError, match="units"):
+        ModelSpec("bad", {}, lambda p: xr.Dataset(), outputs={
+            **outputs, "v": Output("N", "vector", components=("x", "x"))})
+
+
+def test_shared_hardware_and_generated_options():
+    from pipelines.study_commands import collar, pendulum
+    from studies import bifilar, collar as collar_study, hub
+
+    for name, param in bifilar.HARDWARE.items():
+        assert hub.PARAMETERS[name] is param and bifilar.PARAMETERS[name] is param, name
+    assert hub.SPEC.complete({})["tuning_order"] == 3.0
+    for command, params in ((collar, collar_study.PARAMETERS), (pendulum, bifilar.PARAMETERS)):
+        options = {o.name: o for o in command.params}
+        for name, param in params.items():
+            option = options[name]
+            assert option.opts == ["--" + name.replace("_", "-")]
+            assert option.default in (param.default, None), name
+            assert param.long_name in option.help, name
+            if param.units != "1":
+                assert param.units in option.help, name
