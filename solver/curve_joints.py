@@ -184,7 +184,10 @@ class CurveSlidingSet(ElementSet):
         hm[je, 3:12] = hm[3:12, je] = hm[je, je] = True
         if self.rot:
             hm[je, dl : dl + 9] = hm[dl : dl + 9, je] = True
-            hm[3:12, dl : dl + 9] = hm[dl : dl + 9, 3:12] = True
+            # ∂²/∂d_β^k ∂d_γ^ℓ = coef_βγ I: only equal components couple
+            same = np.kron(np.ones((3, 3), dtype=bool), np.eye(3, dtype=bool))
+            hm[3:12, dl : dl + 9] |= same
+            hm[dl : dl + 9, 3:12] |= same
         self._jr, self._jc = np.nonzero(jm)
         self._hr, self._hc = np.nonzero(hm)
         nj = len(cols)

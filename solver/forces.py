@@ -234,15 +234,21 @@ class RelativeRotationSet(ElementSet):
                               for e, t in zip(elements, tri, strict=True)])
         self._cb2 = np.array([system.to_local_vector(e.body_b, t[:, 1])
                               for e, t in zip(elements, tri, strict=True)])
-        ib = np.array([system.offset[e.body_b] + 3 + np.arange(9) for e in elements])
+        # only the directors with a non-zero coefficient in some member enter (structural
+        # pattern: a rotation about a body axis touches two of the three directors)
+        self._ab = _active(self._cb1, self._cb2)
+        ib = np.array([system.offset[e.body_b] + 3 + _director_cols(self._ab) for e in elements])
         if self.grounded:
             self._ea = np.array([t[:, 0] for t in tri])
             self.idx = ib
         else:
             self._ca1 = np.array([system.to_local_vector(e.body_a, t[:, 0])
                                   for e, t in zip(elements, tri, strict=True)])
-            ia = np.array([system.offset[e.body_a] + 3 + np.arange(9) for e in elements])
+            self._aa = _active(self._ca1)
+            ia = np.array([system.offset[e.body_a] + 3 + _director_cols(self._aa)
+                           for e in elements])
             self.idx = np.concatenate([ia, ib], axis=1)
+        self._nb = ib.shape[1]
         self.k = np.array([e.stiffness for e in elements])
         self.c = np.array([e.damping for e in elements])
         self.phi0 = np.array([e.phi0 for e in elements])
@@ -263,29 +269,28 @@ class RelativeRotationSet(ElementSet):
     def _phi_grad(self, q):
         """φ (J,) unwrapped against the last converged step, and ∂φ/∂q at ``idx`` (J, k)."""
         nj = len(self.k)
-        db = q[self.idx[:, -9:]].reshape(nj, 3, 3)  # rows d1, d2, d3 of body b
-        eb1 = np.einsum("ja,jai->ji", self._cb1, db)
-        eb2 = np.einsum("ja,jai->ji", self._cb2, db)
+        ab = self._ab
+        db = q[self.idx[:, -self._nb :]].reshape(nj, len(ab), 3)  # active directors of b
+        cb1, cb2 = self._cb1[:, ab], self._cb2[:, ab]
+        eb1 = np.einsum("ja,jai->ji", cb1, db)
+        eb2 = np.einsum("ja,jai->ji", cb2, db)
         if self.grounded:
             ea = self._ea
         else:
-            da = q[self.idx[:, :9]].reshape(nj, 3, 3)
-            ea = np.einsum("ja,jai->ji", self._ca1, da)
+            ca1 = self._ca1[:, self._aa]
+            da = q[self.idx[:, : 3 * len(self._aa)]].reshape(nj, len(self._aa), 3)
+            ea = np.einsum("ja,jai->ji", ca1, da)
         c = np.einsum("ji,ji->j", ea, eb1)
         s = -np.einsum("ji,ji->j", ea, eb2)
-        # gradients over body b's directors, then body a's
-        gcb = self._cb1[:, :, None] * ea[:, None, :]
-        gsb = -self._cb2[:, :, None] * ea[:, None, :]
-        r2 = c * c + s * s
-        gb = ((c[:, None, None] * gsb - s[:, None, None] * gcb) / r2[:, None, None]).reshape(
-            nj, 9)
+        # gradients over body a's directors, then body b's
+        r2 = (c * c + s * s)[:, None, None]
+        gb = ((c[:, None, None] * -cb2[:, :, None] - s[:, None, None] * cb1[:, :, None])
+              * ea[:, None, :] / r2).reshape(nj, -1)
         if self.grounded:
             g = gb
         else:
-            gca = self._ca1[:, :, None] * eb1[:, None, :]
-            gsa = -self._ca1[:, :, None] * eb2[:, None, :]
-            ga = ((c[:, None, None] * gsa - s[:, None, None] * gca)
-                  / r2[:, None, None]).reshape(nj, 9)
+            ga = (ca1[:, :, None] * (c[:, None, None] * -eb2[:, None, :]
+                                     - s[:, None, None] * eb1[:, None, :]) / r2).reshape(nj, -1)
             g = np.concatenate([ga, gb], axis=1)
         phi = np.arctan2(s, c)
         phi = self._ref + np.angle(np.exp(1j * (phi - self._ref)))
@@ -320,6 +325,16 @@ class RelativeRotationSet(ElementSet):
     def force_jacobians(self, q, v, t):
         _, g = self._phi_grad(q)
         return np.zeros(0), (-self.c[:, None, None] * g[:, :, None] * g[:, None, :]).ravel()
+
+
+def _active(*coefs: Array) -> NDArray[np.int64]:
+    """Directors α whose coefficient is non-zero in some member (columns of ``coefs``)."""
+    return np.nonzero(np.any(np.abs(np.concatenate(coefs, axis=0)) > 0, axis=0))[0]
+
+
+def _director_cols(alphas: NDArray[np.int64]) -> NDArray[np.int64]:
+    """Coordinate offsets (from the first director) of directors ``alphas``."""
+    return (3 * alphas[:, None] + np.arange(3)).ravel()
 
 
 RelativeRotation.set_class = RelativeRotationSet

@@ -18,11 +18,11 @@ then algebraic scalars, then first-order states. Nothing is written into the dec
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 Array = NDArray[np.float64]
 SECOND, ALGEBRAIC, FIRST = "second", "algebraic", "first"
@@ -54,8 +54,8 @@ class StateBlock:
     owner: object
     kind: str
     size: int
-    initial: Array = field(default_factory=lambda: np.zeros(0))
-    rate: Array = field(default_factory=lambda: np.zeros(0))
+    initial: ArrayLike = 0.0
+    rate: ArrayLike = 0.0
     mass: Array | None = None
     units: str = "1"
     long_name: str = ""

@@ -61,6 +61,8 @@ class System:
         self.nh_sets = [s for s in sets if s.n_nonholonomic]
         self.potential_sets = [s for s in sets if len(s.grad_idx)]
         self.force_sets = [s for s in sets if len(s.force_idx)]
+        self.stiff_sets = [s for s in sets if len(s.stiff_rows)]
+        self.fjac_sets = [s for s in sets if len(s.fq_rows) or len(s.fv_rows)]
         m = 0
         self.hol_offset: dict = {}
         for s in self.hol_sets:
@@ -163,13 +165,15 @@ class System:
         self._force_idx = cat([s.force_idx for s in self.force_sets])
         mc, ac = self.M.tocoo(), self.A1.tocoo()
         self.M_vals, self.A1_vals = mc.data, ac.data
-        self.Dv_cols = cat([s.fv_cols for s in self.sets])
+        self.Dv_cols = cat([s.fv_cols for s in self.fjac_sets])
         pattern = {
             "M": (mc.row, mc.col),
             "A1": (ac.row, ac.col),
-            "K": (cat([s.stiff_rows for s in self.sets]), cat([s.stiff_cols for s in self.sets])),
-            "Dq": (cat([s.fq_rows for s in self.sets]), cat([s.fq_cols for s in self.sets])),
-            "Dv": (cat([s.fv_rows for s in self.sets]), self.Dv_cols),
+            "K": (cat([s.stiff_rows for s in self.stiff_sets]),
+                  cat([s.stiff_cols for s in self.stiff_sets])),
+            "Dq": (cat([s.fq_rows for s in self.fjac_sets]),
+                   cat([s.fq_cols for s in self.fjac_sets])),
+            "Dv": (cat([s.fv_rows for s in self.fjac_sets]), self.Dv_cols),
             "H": (cat([s.hess_rows for s in self.hol_sets]),
                   cat([s.hess_cols for s in self.hol_sets])),
             "GT": (self.G_cols, n + self.G_rows),
@@ -222,7 +226,7 @@ class System:
                             [s.discrete_gradient(qi, qf) for s in self.potential_sets])
 
     def stiffness_values(self, q: Array) -> Array:
-        return _cat([s.stiffness(q) for s in self.sets], float)
+        return _cat([s.stiffness(q) for s in self.stiff_sets], float)
 
     def applied(self, q: Array, v: Array, t: float) -> Array:
         """Generalized forces of dampers, loads and first-order right-hand sides."""
@@ -231,11 +235,10 @@ class System:
     def applied_jacobians(self, q: Array, v: Array, t: float) -> tuple[Array, Array]:
         """(∂f/∂q values in the Dq block, ∂f/∂v values in the Dv block)."""
         jq, jv = [], []
-        for s in self.sets:
-            if len(s.fq_rows) or len(s.fv_rows):
-                a, b = s.force_jacobians(q, v, t)
-                jq.append(a)
-                jv.append(b)
+        for s in self.fjac_sets:
+            a, b = s.force_jacobians(q, v, t)
+            jq.append(a)
+            jv.append(b)
         return _cat(jq, float), _cat(jv, float)
 
     def constraint(self, q: Array, t: float) -> Array:
