@@ -137,14 +137,22 @@ class ElementSet:
         """(C (n_holonomic,), Jacobian values at the flat pattern)."""
         return EMPTY_F, EMPTY_F
 
+    def constraint_value(self, q: Array, t: float) -> Array:
+        """C alone (sets whose Jacobian costs extra override this)."""
+        return self.constraint(q, t)[0]
+
+    def constraint_jacobian(self, q: Array, t: float) -> Array:
+        """Jacobian values alone (sets whose values cost extra override this)."""
+        return self.constraint(q, t)[1]
+
     def discrete_jacobian(self, qi: Array, qf: Array, ti: float, tf: float) -> Array:
         """Ḡ with Ḡ·(q_f − q_i) = C(q_f) − C(q_i): Gonzalez's correction of the midpoint
         Jacobian, row by row along Δq (exact for any C; sets override it with cheaper exact
         forms)."""
         qm = 0.5 * (qi + qf)
-        ci, _ = self.constraint(qi, ti)
-        cf, _ = self.constraint(qf, tf)
-        _, gm = self.constraint(qm, 0.5 * (ti + tf))
+        ci = self.constraint_value(qi, ti)
+        cf = self.constraint_value(qf, tf)
+        gm = self.constraint_jacobian(qm, 0.5 * (ti + tf))
         dq = qf[self.hol_cols] - qi[self.hol_cols]
         m = self.n_holonomic
         gdq = np.bincount(self.hol_rows, gm * dq, minlength=m)

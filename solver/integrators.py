@@ -317,7 +317,9 @@ class Midpoint(Integrator):
         qi = self.q
         dq, qf, qm, mu, nu = self._unpack(x)
         gbar = s.discrete_jacobian_values(qi, qf, self.t, self._tf)
-        r1 = s.M @ dq - self._hMv + (self.alpha * h) * (s.A1 @ dq)
+        r1 = s.M @ dq - self._hMv
+        if len(self.first):
+            r1 += (self.alpha * h) * (s.A1 @ dq)
         r1 += c * (s.discrete_gradient(qi, qf) - s.applied(qm, dq / h, self._tm))
         r1 += s.gmul_T(gbar, mu)
         parts = [r1, s.constraint(qf, self._tf)]
@@ -418,9 +420,11 @@ class GeneralizedAlpha(Integrator):
         s, b, h, g, sc = self.sys, self.beta, self.h, self.gamma, self._sc
         dq, qf, vf, _anew, mu, nu = self._unpack(x)
         c, gf = s.constraint_and_jacobian(qf, self._tf)
-        rate = np.zeros(s.n)
-        rate[self.first] = vf[self.first]
-        r1 = s.M @ dq + self._mconst + sc * (s.A1 @ rate)
+        r1 = s.M @ dq + self._mconst
+        if len(self.first):
+            rate = np.zeros(s.n)
+            rate[self.first] = vf[self.first]
+            r1 += sc * (s.A1 @ rate)
         r1 += sc * (s.gradient(qf) - s.applied(qf, vf, self._tf))
         r1 += s.gmul_T(gf, mu)
         parts = [r1, c]

@@ -214,6 +214,12 @@ class QuadraticSet(ElementSet):
     def constraint(self, q, t):
         return self.quad.value(q, t), self.quad.jacobian_values(q, t)
 
+    def constraint_value(self, q, t):
+        return self.quad.value(q, t)
+
+    def constraint_jacobian(self, q, t):
+        return self.quad.jacobian_values(q, t)
+
     def discrete_jacobian(self, qi, qf, ti, tf):
         # the midpoint Jacobian of a quadratic is its exact discrete derivative
         return self.quad.jacobian_values(0.5 * (qi + qf), 0.5 * (ti + tf))

@@ -216,7 +216,8 @@ class System:
     def _gather(self, idx: NDArray[np.int64], parts: list[Array]) -> Array:
         if not len(idx):
             return np.zeros(self.n)
-        return np.bincount(idx, np.concatenate(parts), minlength=self.n)
+        vals = parts[0] if len(parts) == 1 else np.concatenate(parts)
+        return np.bincount(idx, vals, minlength=self.n)
 
     def gradient(self, q: Array) -> Array:
         return self._gather(self._grad_idx, [s.gradient(q) for s in self.potential_sets])
@@ -243,10 +244,10 @@ class System:
 
     def constraint(self, q: Array, t: float) -> Array:
         """All holonomic rows C(q, t) (length mh)."""
-        return _cat([s.constraint(q, t)[0] for s in self.hol_sets], float)
+        return _cat([s.constraint_value(q, t) for s in self.hol_sets], float)
 
     def jacobian_values(self, q: Array, t: float) -> Array:
-        return _cat([s.constraint(q, t)[1] for s in self.hol_sets], float)
+        return _cat([s.constraint_jacobian(q, t) for s in self.hol_sets], float)
 
     def constraint_and_jacobian(self, q: Array, t: float) -> tuple[Array, Array]:
         out = [s.constraint(q, t) for s in self.hol_sets]
@@ -348,5 +349,7 @@ class System:
 
 
 def _cat(arrs, dtype=np.int64):
-    arrs = [np.asarray(a) for a in arrs if len(a)]
-    return np.concatenate(arrs).astype(dtype) if arrs else np.zeros(0, dtype=dtype)
+    arrs = [a for a in arrs if len(a)]
+    if len(arrs) == 1 and arrs[0].dtype == dtype:
+        return arrs[0]  # the common case of one set: no copy
+    return np.concatenate(arrs).astype(dtype, copy=False) if arrs else np.zeros(0, dtype=dtype)
