@@ -36,7 +36,6 @@ from pipelines.archive import (
     read_case,
     write_case,
 )
-from studies.harmonics import N_MAX, case_harmonics, harmonics
 from pipelines.plots import plot_archive
 from pipelines.sweep import (
     StudyError,
@@ -46,6 +45,7 @@ from pipelines.sweep import (
     run_case,
     run_sweep,
 )
+from studies.harmonics import N_MAX, case_harmonics, harmonics
 
 REPO = Path(__file__).resolve().parents[1]
 if str(REPO) not in sys.path:
@@ -704,7 +704,8 @@ def test_outputs_are_filled_only_through_declarations():
 
 def test_shared_hardware_and_generated_options():
     from pipelines.study_commands import collar, pendulum
-    from studies import bifilar, collar as collar_study, hub
+    from studies import bifilar, hub
+    from studies import collar as collar_study
 
     for name, param in bifilar.HARDWARE.items():
         assert hub.PARAMETERS[name] is param and bifilar.PARAMETERS[name] is param, name
