@@ -3,19 +3,36 @@
 netCDF-C/HDF5 is not thread safe and a sweep may be killed at any time, so every worker writes
 its own case file (``cases/<case_id>.nc``) through a temporary file in the same directory and an
 ``os.replace``: a case file either exists complete or not at all. The sweep process alone then
-reads them all and writes the consolidated archive, following the CF-1.11 conventions.
+reads them all and writes the consolidated archive, following the CF-1.8 conventions (the
+newest version the CF checker, ``cfchecks`` of the ``cfchecker`` package, verifies; nothing here
+needs a later one). Every file passes that checker:
+
+* strings (messages, case ids and names, string parameters) are fixed-length character arrays
+  (a ``string<N>`` dimension), not netCDF-4 variable-length strings;
+* every dimension has a coordinate variable. A dimension whose values are names (``direction``
+  x/y, a swept string parameter such as ``hole``) has an integer index as its coordinate variable
+  and the names in the auxiliary label variable ``<dim>_label``; :func:`open_archive` and
+  :func:`read_case` turn the names back into the dimension's coordinate, so that
+  ``ds.sel(direction="x")`` works (with plain ``xarray.open_dataset`` use
+  ``ds.sel(direction=0)`` or ``ds.swap_dims``);
+* ``standard_name`` is given where CF has one (``time``).
+
+Files are created with the permissions the user's umask gives (e.g. 0644), so colleagues on a
+shared cluster can read them.
 
 Case file (one case)
     The case summary made by :func:`case_summary` from the model's output declarations
     (:class:`studies.parameters.Output`): its scalar results; for a per-rev periodic model
     (the hub) the harmonics from :func:`studies.harmonics.case_harmonics`, the last recorded
-    revolution of the declared histories (dimension ``time_in_rev``, coordinate ``psi`` in
-    degrees) and a few ``run_*`` scalars; for any other model (collar, pendulum) the declared
+    revolution of the declared histories (dimension ``time_in_rev`` with its sample-number
+    coordinate, auxiliary coordinate ``psi`` in degrees) and a few ``run_*`` scalars; for any
+    other model (collar, pendulum) the declared
     histories whole (dimension ``sample``, with the variable ``time``). An output dimension named
     like a model parameter is renamed ``<dim>_index`` (the hub's ``bifilar`` becomes
-    ``bifilar_index``). Global attributes ``case_id``, ``model``,
-    ``parameters`` (JSON), ``status``, ``message``, ``wall_time`` and, for a failure,
-    ``traceback``. A failed case holds the attributes only.
+    ``bifilar_index``). Global attributes ``Conventions``, ``case_id``, ``model``,
+    ``model_version`` (package and model version, part of the case id), ``parameters`` (JSON),
+    ``status``, ``message``, ``wall_time`` and, for a failure, ``traceback``. A failed case
+    holds the attributes only.
 
 Consolidated archive
     The same variables with the case dimensions in front: one dimension per swept parameter
@@ -45,7 +62,9 @@ import xarray as xr
 from studies.harmonics import N_MAX, case_harmonics, harmonic_names, recording_layout
 from studies.parameters import ModelSpec
 
-CONVENTIONS = "CF-1.11"
+CONVENTIONS = "CF-1.8"
+# Suffix of the auxiliary variable holding the names of a dimension whose values are strings.
+LABEL_SUFFIX = "_label"
 REFERENCES = (
     "O. A. Bauchau, J. Rodriguez, S.-Y. Chen, Modeling the Bifilar Pendulum Using Nonlinear, "
     "Flexible Multibody Dynamics, Journal of the American Helicopter Society, 2003"
@@ -166,6 +185,12 @@ def _one_revolution(values: np.ndarray, samples_per_rev: int, psi_start: float) 
     return np.fft.irfft(shifted, n=samples_per_rev, axis=-1)
 
 
+def _time_in_rev_coord(samples_per_rev: int) -> xr.Variable:
+    return xr.Variable("time_in_rev", np.arange(samples_per_rev, dtype=np.int32),
+                       {"units": "1", "long_name": "sample number within the last recorded "
+                        "revolution (azimuth in psi)"})
+
+
 def _psi_coord(samples_per_rev: int) -> xr.Variable:
     return xr.Variable(
         "time_in_rev",
@@ -224,7 +249,7 @@ def case_summary(ds: xr.Dataset, spec: ModelSpec, n_max: int = N_MAX) -> xr.Data
                          _one_revolution(var.values.astype(float), n, psi_last), attrs)
             out = _copy_coords(out, ds, other)
         if histories:
-            out = out.assign_coords(psi=_psi_coord(n))
+            out = out.assign_coords(psi=_psi_coord(n), time_in_rev=_time_in_rev_coord(n))
         out["run_hub_speed"] = ((), omega, {"units": "rad s-1", "long_name": "rotor speed"})
         out["run_revolutions"] = ((), np.int32(revs),
                                   {"units": "1", "long_name": "revolutions recorded"})
@@ -247,6 +272,7 @@ def case_summary(ds: xr.Dataset, spec: ModelSpec, n_max: int = N_MAX) -> xr.Data
         if histories:
             decl = spec.outputs.get("time")
             time_attrs = decl.attrs() if decl is not None else {"units": "s", "long_name": "time"}
+            time_attrs = {**time_attrs, "standard_name": "time"}
             out["time"] = ("sample", np.asarray(ds["time"].values, dtype=float), time_attrs)
             out = out.assign_coords(sample=_sample_coord(ds.sizes["time"]))
     for name, (units, long_name) in scalars.items():
@@ -283,15 +309,77 @@ def _float_encoding(ds: xr.Dataset) -> dict[str, dict[str, Any]]:
     }
 
 
+def _is_text(var: xr.Variable) -> bool:
+    return var.dtype.kind in "OUS"
+
+
+def cf_encode(ds: xr.Dataset) -> tuple[xr.Dataset, dict[str, dict[str, Any]]]:
+    """The CF-valid form of ``ds`` and the encoding of its strings (see the module notes).
+
+    A dimension coordinate of strings becomes an int32 index with the names in the auxiliary
+    coordinate ``<dim>_label``; every string variable is written as a fixed-length character
+    array.
+
+    Returns
+    -------
+    tuple
+        The dataset to write and ``{name: {"dtype": "S1"}}`` for its string variables.
+    """
+    for dim in list(ds.dims):
+        if dim in ds.coords and _is_text(ds[dim].variable):
+            names = ds[dim].variable
+            meaning = names.attrs.get("long_name", dim)
+            index = xr.Variable(dim, np.arange(names.size, dtype=np.int32), {
+                "units": "1",
+                "long_name": f"{meaning}: index, names in {dim}{LABEL_SUFFIX}",
+            })
+            label = xr.Variable(dim, np.asarray(names.values, dtype=object), dict(names.attrs))
+            ds = ds.drop_vars(dim).assign_coords({dim: index, f"{dim}{LABEL_SUFFIX}": label})
+    encoding = {name: {"dtype": "S1"} for name, var in ds.variables.items() if _is_text(var)}
+    return ds, encoding
+
+
+def cf_decode(ds: xr.Dataset) -> xr.Dataset:
+    """Undo :func:`cf_encode`: the names of ``<dim>_label`` become the coordinate of ``dim``."""
+    for name in list(ds.coords):
+        dim = name.removesuffix(LABEL_SUFFIX)
+        if (name != dim and ds[name].dims == (dim,) and dim in ds.coords
+                and ds[dim].dtype.kind in "iu"):
+            names = ds[name].variable
+            ds = ds.drop_vars([dim, name]).assign_coords(
+                {dim: xr.Variable(dim, names.values.astype(str).astype(object),
+                                  dict(names.attrs))})
+    return ds
+
+
+def _umask() -> int:
+    """The process's umask, read without changing it where Linux allows."""
+    with contextlib.suppress(OSError, ValueError):
+        with open("/proc/self/status") as status:
+            for line in status:
+                if line.startswith("Umask:"):
+                    return int(line.split()[1], 8)
+    mask = os.umask(0o022)  # fallback: read by setting, then restore at once
+    os.umask(mask)
+    return mask
+
+
 def _write_atomic(ds: xr.Dataset, path: Path, encoding: Mapping[str, Any]) -> Path:
-    """Write ``ds`` to ``path`` so that ``path`` is never seen half written."""
+    """Write ``ds`` to ``path`` so that ``path`` is never seen half written.
+
+    The file gets the permissions a plain ``open`` would give (0666 less the umask), not the
+    private 0600 of a temporary file.
+    """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
+    ds, text = cf_encode(ds)
+    encoding = {**text, **{k: v for k, v in encoding.items() if k in ds.variables}}
     # Same directory as the target, so that os.replace is an atomic rename on one filesystem.
     # The name does not end in .nc: a leftover from a killed writer is never taken for a case.
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=".tmp")
     os.close(fd)
     try:
+        os.chmod(tmp, 0o666 & ~_umask())
         # The data are in memory. Without this, xarray inside a dask worker would open a client
         # to the scheduler and take a cluster-wide lock for every write.
         with dask.config.set(scheduler="synchronous"):
@@ -330,7 +418,7 @@ def read_case(path: str | os.PathLike[str]) -> xr.Dataset:
     """Load a case file fully into memory (the file is closed on return)."""
     try:
         with xr.open_dataset(path, engine="netcdf4") as ds:
-            return ds.load()
+            return cf_decode(ds.load())
     except (OSError, ValueError) as exc:
         raise ArchiveError(
             f"cannot read case file {path}: {exc}; delete it and rerun the sweep to recompute it"
@@ -462,10 +550,11 @@ def consolidate(
                 template[name] = xr.Variable(var.dims, np.empty(tuple(sizes.values()), var.dtype),
                                              var.attrs)
         for name, coord in ds.coords.items():
-            if name not in ("psi", "sample") and name not in inner_coords:
+            if name not in ("psi", "sample", "time_in_rev") and name not in inner_coords:
                 inner_coords[name] = coord.variable
     if samples:
         inner_coords["psi"] = _psi_coord(samples)
+        inner_coords["time_in_rev"] = _time_in_rev_coord(samples)
     if steps:
         inner_coords["sample"] = _sample_coord(steps)
 
@@ -527,6 +616,6 @@ def open_archive(path: str | os.PathLike[str]) -> xr.Dataset:
         raise FileNotFoundError(f"archive not found: {path}")
     try:
         with xr.open_dataset(path, engine="netcdf4") as ds:
-            return ds.load()
+            return cf_decode(ds.load())
     except (OSError, ValueError) as exc:
         raise ArchiveError(f"cannot read archive {path}: {exc}") from exc

@@ -19,15 +19,17 @@ from __future__ import annotations
 import contextlib
 import shlex
 import signal
+import sys
 from collections.abc import Iterator
 from importlib import resources
 from importlib.resources.abc import Traversable
 from pathlib import Path
-from typing import NoReturn
+from typing import Any, NoReturn
 
 import click
 
 from pipelines.archive import ArchiveError, code_version, open_archive, status_counts
+from pipelines.checks import InputError, check_output_dir, check_scheduler_address
 from pipelines.study_commands import collar, pendulum
 from pipelines.sweep import CASES_DIR, StudyError, SweepError, run_sweep
 from studies.parameters import ParameterError
@@ -38,7 +40,8 @@ EXIT_USER_ERROR = 2
 EXIT_INTERRUPTED = 130
 
 # Errors whose message tells the user what to fix; anything else is a bug and keeps its traceback.
-USER_ERRORS = (StudyError, ParameterError, ArchiveError, SweepError, FileNotFoundError)
+USER_ERRORS = (StudyError, ParameterError, ArchiveError, SweepError, FileNotFoundError,
+               InputError)
 
 
 def default_study() -> Traversable:
@@ -105,10 +108,13 @@ def _exit_if_not_ok(line: str | None) -> None:
         raise click.exceptions.Exit(EXIT_FAILED_CASES)
 
 
-def _check_exclusive(workers: int | None, scheduler: str | None) -> None:
+def _check_cluster(workers: int | None, scheduler: str | None) -> None:
     if workers is not None and scheduler is not None:
         _fail("--workers and --scheduler are mutually exclusive: --workers starts a local "
               "cluster, --scheduler uses a running one")
+    if scheduler is not None:
+        with _user_errors():
+            check_scheduler_address(scheduler)
 
 
 def _command_line(ctx: click.Context, *args: str) -> str:
@@ -134,7 +140,30 @@ scheduler_option = click.option(
 )
 
 
-@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+class OneLineErrors(click.Group):
+    """A command group whose usage errors (bad option value, unknown option, missing argument)
+    are one ``error:`` line with exit status 2, like every other user error."""
+
+    def main(self, args: Any = None, prog_name: str | None = None,
+             complete_var: str | None = None, standalone_mode: bool = True,
+             **extra: Any) -> Any:
+        if not standalone_mode:
+            return super().main(args, prog_name, complete_var, standalone_mode, **extra)
+        try:
+            rv = super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
+        except click.ClickException as exc:
+            message = " ".join(exc.format_message().split())
+            ctx = getattr(exc, "ctx", None)
+            hint = f" (see '{ctx.command_path} --help')" if ctx is not None else ""
+            click.echo(f"error: {message}{hint}", err=True)
+            sys.exit(exc.exit_code)
+        except click.Abort:
+            click.echo("error: interrupted", err=True)
+            sys.exit(EXIT_INTERRUPTED)
+        sys.exit(rv if isinstance(rv, int) else 0)
+
+
+@click.group(cls=OneLineErrors, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(code_version(), prog_name="bifilar")
 def main() -> None:
     """Bifilar pendulum absorbers: parameter studies, archives and report plots."""
@@ -161,7 +190,7 @@ def sweep(ctx: click.Context, study: Path, out_dir: Path, workers: int | None,
     interrupted sweep resumes when run again. Prints the archive path. Exit status 0 if every
     case is ok, 1 if some failed or did not run, 2 for bad input.
     """
-    _check_exclusive(workers, scheduler)
+    _check_cluster(workers, scheduler)
     command = _command_line(ctx, str(study), "--out", str(out_dir),
                             *_cluster_args(workers, scheduler),
                             *(["--retry-failed"] if retry_failed else []))
@@ -188,6 +217,7 @@ def plot(archive: Path, out_dir: Path, formats: tuple[str, ...]) -> None:
     from pipelines.plots import plot_archive  # matplotlib only when plotting
 
     with _user_errors():
+        check_output_dir(out_dir)
         paths = plot_archive(archive, out_dir, formats=formats)
     for path in paths:
         click.echo(str(path))
@@ -207,8 +237,11 @@ def run(ctx: click.Context, out_dir: Path, workers: int | None, scheduler: str |
     """
     from pipelines.plots import plot_archive
 
-    _check_exclusive(workers, scheduler)
+    _check_cluster(workers, scheduler)
     command = _command_line(ctx, "--out", str(out_dir), *_cluster_args(workers, scheduler))
+    with _user_errors():
+        check_output_dir(out_dir)
+        check_output_dir(out_dir / "plots", "--out")
     with _user_errors(), _terminate_as_interrupt(), resources.as_file(default_study()) as study:
         archive = run_sweep(study, out_dir, workers=workers, scheduler=scheduler,
                             command=command)

@@ -12,12 +12,14 @@ import os
 from collections.abc import Callable, Collection, Mapping
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
-from typing import Any
+from typing import Any, NoReturn
 
 import click
 import numpy as np
 import xarray as xr
 
+from pipelines.archive import CONVENTIONS
+from pipelines.checks import InputError, check_output_dir, check_output_file
 from studies import bifilar as pendulum_study
 from studies import collar as collar_study
 from studies.parameters import Param, ParameterError
@@ -68,9 +70,20 @@ def param_options(parameters: Mapping[str, Param], *, no_default: Collection[str
     return decorate
 
 
-def _fail(msg: str) -> None:
-    click.echo(f"error: {msg}", err=True)
+def _fail(msg: str) -> NoReturn:
+    click.echo(f"error: {' '.join(str(msg).split())}", err=True)
     raise SystemExit(2)
+
+
+def _writable(out: Path | None, figures: Path | None) -> None:
+    """Refuse an unwritable ``--out`` file or ``--figures`` directory before any run."""
+    try:
+        if out is not None:
+            check_output_file(out, "--out")
+        if figures is not None:
+            check_output_dir(figures, "--figures")
+    except InputError as exc:
+        _fail(str(exc))
 
 
 def _write(ds: xr.Dataset, out: Path) -> None:
@@ -157,7 +170,7 @@ def collar_figures(out_dir: Path, steps_per_period: int = 1000, workers: int = 2
                 "curve": list(curves),
                 "theta0": ("theta0", thetas, {"units": "degree", "long_name": "release angle"})},
         attrs={"title": "Collar on a circle and a cycloid (paper Figs. 11-12)",
-               "Conventions": "CF-1.11"})
+               "Conventions": CONVENTIONS})
     paths = [out_dir / "collar_periods.nc"]
     _write(table, paths[0])
     fine = np.linspace(1.0, 89.0, 200)
@@ -188,6 +201,7 @@ def collar_figures(out_dir: Path, steps_per_period: int = 1000, workers: int = 2
               help="reproduce Figs. 11 and 12 into this directory instead")
 def collar(out: Path | None, figures: Path | None, **params: Any) -> None:
     """The paper's validation: a collar sliding on a circle or a cycloid (Figs. 10-12)."""
+    _writable(out, figures)
     if figures is not None:
         for p in collar_figures(figures, params["steps_per_period"]):
             click.echo(str(p))
@@ -196,6 +210,7 @@ def collar(out: Path | None, figures: Path | None, **params: Any) -> None:
                               ("--out", out)) if v is None]
     if missing:
         _fail(f"missing {', '.join(missing)} (or give --figures DIR)")
+    assert out is not None
     ds = _run_and_write(collar_study.SPEC, params, out)
     click.echo(f"measured period  {float(ds.period):.9f} s")
     click.echo(f"analytic period  {float(ds.period_analytic):.9f} s")
@@ -233,7 +248,7 @@ def pendulum_figures(out_dir: Path, base: dict[str, Any], workers: int = 2) -> l
         coords={"hole": list(shapes),
                 "amplitude": ("amplitude", amps, {"units": "degree",
                               "long_name": "release angle"})},
-        attrs={"title": "Bifilar tuning order against amplitude", "Conventions": "CF-1.11",
+        attrs={"title": "Bifilar tuning order against amplitude", "Conventions": CONVENTIONS,
                "frequency_order_linear": n_lin.order_linear})
     paths = [out_dir / "pendulum_order.nc"]
     _write(table, paths[0])
@@ -261,6 +276,7 @@ def pendulum_figures(out_dir: Path, base: dict[str, Any], workers: int = 2) -> l
 def pendulum(out: Path | None, figures: Path | None, **params: Any) -> None:
     """One bifilar pendulum on a hub spinning at constant speed (Figs. 1, 5-7, Eq. 7)."""
     spec = pendulum_study.SPEC
+    _writable(out, figures)
     hole_diameter, amplitude = params["hole_diameter"], params.pop("amplitude")
     if hole_diameter is not None and params["tuning_order"] is not None:
         _fail("give either --hole-diameter or --tuning-order, not both")
@@ -278,6 +294,7 @@ def pendulum(out: Path | None, figures: Path | None, **params: Any) -> None:
     missing = [n for n, v in (("--amplitude", amplitude), ("--out", out)) if v is None]
     if missing:
         _fail(f"missing {', '.join(missing)} (or give --figures DIR)")
+    assert out is not None
     ds = _run_and_write(spec, {**given, "amplitude": amplitude}, out)
     click.echo(f"tuning order measured   {float(ds.frequency_order):.6f}")
     click.echo(f"tuning order linear     {float(ds.frequency_order_linear):.6f}")

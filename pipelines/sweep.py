@@ -27,9 +27,15 @@ Everything in the file is validated before any case starts (:func:`load_study`),
 case's complete parameter set through ``ModelSpec.complete`` (which rejects impossible geometry).
 
 Each case runs as :func:`run_case` on a dask worker, which writes ``cases/<case_id>.nc``
-atomically; the id is a hash of the model name and the complete parameters, so running the same
-command again after an interruption computes only the cases without a file. After a change to a
-model's code, delete ``cases/`` (or use a new output directory) to recompute.
+atomically; the id is a hash of the model name, the code version (package version and the
+model's ``ModelSpec.version``) and the complete parameters, so running the same command again
+after an interruption computes only the cases without a file, and cases cached by another
+version of the code or of the model are computed again rather than reused. Bump a model's
+``version`` when a change to it changes its results.
+
+While a case runs, the model's progress lines (:func:`studies.progress.report`: the hub reports
+each revolution and its periodicity change) travel from the worker to the client as dask events
+and are printed under the case's name.
 """
 
 from __future__ import annotations
@@ -38,14 +44,17 @@ import contextlib
 import difflib
 import hashlib
 import importlib
+import importlib.util
 import itertools
 import json
+import math
 import os
 import shlex
 import sys
 import time
 import tomllib
 import traceback
+import uuid
 from collections.abc import Iterator, Mapping
 from concurrent.futures import CancelledError
 from dataclasses import dataclass
@@ -56,17 +65,21 @@ import numpy as np
 import xarray as xr
 
 from pipelines.archive import (
+    CONVENTIONS,
     STATUS_FAILED,
     STATUS_OK,
     CaseEntry,
     case_summary,
+    code_version,
     consolidate,
     global_attrs,
     reserved_names,
     stale_temporaries,
     write_case,
 )
+from pipelines.checks import check_output_dir, check_scheduler_address
 from studies.parameters import ModelSpec, Param, ParameterError
+from studies.progress import reporting
 from studies.registry import available, get_model
 
 CASES_DIR = "cases"
@@ -74,6 +87,12 @@ ARCHIVE_NAME = "archive.nc"
 DEFAULT_WORKERS = 2
 # Length of the hex case id: 64 bits makes an accidental clash within one study negligible.
 CASE_ID_LENGTH = 16
+# Dask event topic prefix of the progress lines; one topic per sweep.
+PROGRESS_TOPIC = "bifilar-progress"
+# Least time between two forwarded progress lines of one case (s); the first always goes.
+PROGRESS_INTERVAL = 10.0
+# Seconds to wait for a --scheduler to answer.
+CONNECT_TIMEOUT = 30
 
 TOP_LEVEL_KEYS = ("model", "title", "description", "fixed", "sweep", "cases")
 
@@ -126,13 +145,31 @@ def resolve_model(ref: str) -> ModelSpec:
         ) from exc
 
 
-def make_case_id(model: str, params: Mapping[str, Any]) -> str:
-    """Stable identifier of a case: a hash of the model name and its complete parameters.
+def model_version(spec: ModelSpec) -> str:
+    """The code version a case of ``spec`` is computed with: the package version and the
+    model's own ``version`` (e.g. ``"bifilar 0.1.0, hub 1"``)."""
+    return f"bifilar {code_version()}, {spec.name} {spec.version}"
+
+
+def make_case_id(model: str, params: Mapping[str, Any], version: str = "") -> str:
+    """Stable identifier of a case: a hash of the model name, the code version and the
+    complete parameters.
 
     JSON with sorted keys and Python's shortest float repr is the same in every process and
-    session, so a rerun finds the files of the cases it already computed.
+    session, so a rerun finds the files of the cases it already computed; another code or model
+    version (:func:`model_version`) gives other ids, so stale cases are never reused.
+
+    Parameters
+    ----------
+    model
+        The model's name.
+    params
+        The complete parameters of the case.
+    version
+        :func:`model_version` of the model.
     """
-    text = json.dumps({"model": model, "parameters": dict(params)}, sort_keys=True)
+    text = json.dumps({"model": model, "version": version, "parameters": dict(params)},
+                      sort_keys=True)
     return hashlib.sha256(text.encode()).hexdigest()[:CASE_ID_LENGTH]
 
 
@@ -155,7 +192,7 @@ class Case:
     params
         Complete, validated parameters (defaults filled in).
     case_id
-        :func:`make_case_id` of the model and ``params``.
+        :func:`make_case_id` of the model, its version and ``params``.
     index
         Position along the archive's case dimensions.
     """
@@ -348,6 +385,7 @@ def load_study(path: str | os.PathLike[str]) -> Study:
 
     cases: list[Case] = []
     sweep: dict[str, list[Any]] = {}
+    version = model_version(spec)
     if has_sweep:
         kind: Literal["sweep", "cases"] = "sweep"
         for name, values in _table(f"{src}: [sweep]", doc["sweep"]).items():
@@ -370,7 +408,7 @@ def load_study(path: str | os.PathLike[str]) -> Study:
             point = {name: sweep[name][i] for name, i in zip(sweep, index, strict=True)}
             label = ", ".join(f"{k}={_format_value(v)}" for k, v in point.items())
             params = complete(label, {**fixed, **point})
-            cases.append(Case(label, params, make_case_id(spec.name, params), index))
+            cases.append(Case(label, params, make_case_id(spec.name, params, version), index))
     else:
         kind = "cases"
         entries = doc["cases"]
@@ -380,6 +418,9 @@ def load_study(path: str | os.PathLike[str]) -> Study:
             raise StudyError(f"{src}: cases = [] is an empty list; add [[cases]] tables")
         names: set[str] = set()
         for i, entry in enumerate(entries):
+            if not entry:
+                raise StudyError(f"{src}: [[cases]] number {i + 1} is empty; give it a name "
+                                 "and the parameters that make it a case")
             label = entry.get("name", f"case {i}")
             if not isinstance(label, str):
                 raise StudyError(f"{src}: case {i}: name = {label!r} must be a string")
@@ -396,7 +437,7 @@ def load_study(path: str | os.PathLike[str]) -> Study:
                                      "fixed parameters are common to all cases, remove one")
                 given[name] = _check_value(where, spec, name, value)
             params = complete(repr(label), given)
-            cases.append(Case(label, params, make_case_id(spec.name, params), (i,)))
+            cases.append(Case(label, params, make_case_id(spec.name, params, version), (i,)))
 
     seen: dict[str, str] = {}
     for case in cases:
@@ -415,13 +456,37 @@ def _one_line(exc: BaseException) -> str:
 def _failure_case(case_id: str, model: str, params: Mapping[str, Any], message: str,
                   wall_time: float, tb: str = "") -> xr.Dataset:
     return xr.Dataset(attrs={
-        "case_id": case_id, "model": model, "parameters": json.dumps(dict(params), sort_keys=True),
+        "Conventions": CONVENTIONS, "case_id": case_id, "model": model,
+        "parameters": json.dumps(dict(params), sort_keys=True),
         "status": np.int8(STATUS_FAILED), "message": message, "wall_time": wall_time,
         "traceback": tb,
     })
 
 
-def run_case(model_name: str, params: Mapping[str, Any], case_file: str) -> dict[str, Any]:
+def _progress_listener(topic: str, case_id: str) -> Any:
+    """A :func:`studies.progress.report` listener that forwards lines to the sweep's client as
+    dask events (at most one per :data:`PROGRESS_INTERVAL` seconds; the first always), or
+    ``None`` outside a dask worker."""
+    try:
+        from distributed import get_worker
+
+        worker = get_worker()
+    except (ImportError, ValueError):
+        return None
+    last = -math.inf
+
+    def listen(message: str) -> None:
+        nonlocal last
+        now = time.monotonic()
+        if now - last >= PROGRESS_INTERVAL:
+            last = now
+            worker.log_event(topic, {"case_id": case_id, "message": message})
+
+    return listen
+
+
+def run_case(model_name: str, params: Mapping[str, Any], case_file: str,
+             progress_topic: str | None = None) -> dict[str, Any]:
     """Run one case and write its case file atomically; the dask task of a sweep.
 
     Any exception of the model (or a result with ``attrs["status"] == "failed"`` or
@@ -438,6 +503,8 @@ def run_case(model_name: str, params: Mapping[str, Any], case_file: str) -> dict
         Complete parameters of the case.
     case_file
         Path of the case file to write, ``<out>/cases/<case_id>.nc``.
+    progress_topic
+        Dask event topic to which the model's progress lines are sent (on a dask worker).
 
     Returns
     -------
@@ -449,9 +516,17 @@ def run_case(model_name: str, params: Mapping[str, Any], case_file: str) -> dict
     case_id = Path(case_file).stem
     status, message, tb = STATUS_OK, "", ""
     summary = xr.Dataset()
+    version = ""
+    listener = _progress_listener(progress_topic, case_id) if progress_topic else None
     try:
         spec = resolve_model(model_name)
-        result = spec.run(spec.complete(params))
+        version = model_version(spec)
+        if listener is not None:
+            listener(f"started on {_worker_name()}")
+            with reporting(listener):
+                result = spec.run(spec.complete(params))
+        else:
+            result = spec.run(spec.complete(params))
         reported = str(result.attrs.get("status", "ok")).lower()
         if reported in ("failed", str(STATUS_FAILED)):
             raise ModelFailure(str(result.attrs.get("message", "model reported failure")))
@@ -464,7 +539,8 @@ def run_case(model_name: str, params: Mapping[str, Any], case_file: str) -> dict
         summary = xr.Dataset()
     wall_time = time.perf_counter() - start
     summary.attrs = {
-        "case_id": case_id, "model": model_name,
+        "Conventions": CONVENTIONS, "case_id": case_id, "model": model_name,
+        "model_version": version,
         "parameters": json.dumps(dict(params), sort_keys=True),
         "status": np.int8(status), "message": message, "wall_time": wall_time, "traceback": tb,
     }
@@ -479,6 +555,15 @@ def run_case(model_name: str, params: Mapping[str, Any], case_file: str) -> dict
         write_case(_failure_case(case_id, model_name, params, message, wall_time,
                                  traceback.format_exc()), case_file)
     return {"case_id": case_id, "status": status, "message": message, "wall_time": wall_time}
+
+
+def _worker_name() -> str:
+    try:
+        from distributed import get_worker
+
+        return str(get_worker().address)
+    except (ImportError, ValueError):
+        return "this process"
 
 
 def _case_done(path: Path, retry_failed: bool) -> bool:
@@ -501,8 +586,8 @@ def _connect(workers: int | None, scheduler: str | None) -> Iterator[Any]:
 
     if scheduler is not None:
         try:
-            client = Client(scheduler)
-        except (OSError, TimeoutError) as exc:
+            client = Client(scheduler, timeout=CONNECT_TIMEOUT)
+        except (OSError, TimeoutError, ValueError) as exc:
             raise SweepError(f"cannot connect to the dask scheduler at {scheduler}: "
                              f"{_one_line(exc)}") from exc
         with client:
@@ -560,15 +645,19 @@ def run_sweep(
         If the study file is invalid (nothing has run).
     SweepError
         If the dask scheduler cannot be reached.
+    pipelines.checks.InputError
+        If the output directory cannot be written or the scheduler address is malformed
+        (nothing has run).
     """
     if workers is not None and scheduler is not None:
         raise StudyError("give either a number of workers or a scheduler address, not both")
     if workers is not None and workers < 1:
         raise StudyError(f"workers = {workers}: need at least one worker")
+    if scheduler is not None:
+        check_scheduler_address(scheduler)
     study = load_study(study_path)
-    out_dir = Path(out_dir)
-    cases_dir = out_dir / CASES_DIR
-    cases_dir.mkdir(parents=True, exist_ok=True)
+    out_dir = check_output_dir(out_dir)
+    cases_dir = check_output_dir(out_dir / CASES_DIR)
 
     def say(line: str) -> None:
         if progress:
@@ -640,21 +729,46 @@ def consolidate_study(study: Study | str | os.PathLike[str], out_dir: str | os.P
     )
 
 
+def _dashboard_works(client: Any, info: Mapping[str, Any]) -> bool:
+    """Whether the scheduler serves a real dashboard (it needs bokeh in the scheduler's
+    environment; without it the link leads to a page asking for bokeh)."""
+    if "dashboard" not in info.get("services", {}):
+        return False
+    try:
+        return bool(client.run_on_scheduler(_has_bokeh))
+    except Exception:  # an old or restricted scheduler: do not advertise what may not work
+        return False
+
+
+def _has_bokeh() -> bool:
+    return importlib.util.find_spec("bokeh") is not None
+
+
 def _run_cases(study: Study, todo: list[Case], cases_dir: Path, workers: int | None,
                scheduler: str | None, finished: int, total: int, say: Any) -> None:
     from distributed import as_completed
 
     with _connect(workers, scheduler) as client:
         info = client.scheduler_info()
-        dashboard = "dashboard" in info.get("services", {})
+        dashboard = _dashboard_works(client, info)
         say(f"running {len(todo)} case(s) of {study.path} on {len(info.get('workers', {}))} "
             "dask worker(s)" + (f"; dashboard {client.dashboard_link}" if dashboard else ""))
+        labels = {c.case_id: c.label for c in todo}
+        topic = f"{PROGRESS_TOPIC}-{uuid.uuid4().hex[:12]}"
+
+        def progress_line(event: tuple[float, Any]) -> None:
+            msg = event[1]
+            if isinstance(msg, dict) and msg.get("case_id") in labels:
+                say(f"  case {labels[msg['case_id']]}: {msg.get('message', '')}")
+
+        client.subscribe_topic(topic, progress_line)
         paths = [str(c.path(cases_dir)) for c in todo]
         futures = client.map(
             run_case,
             [study.model_ref] * len(todo),
             [c.params for c in todo],
             paths,
+            progress_topic=topic,
             key=[f"bifilar-case-{c.case_id}" for c in todo],
             pure=False,
         )

@@ -60,14 +60,13 @@ HARDWARE: dict[str, Param] = {
                           minimum=0.5, maximum=10.0),
     "hub_speed": Param(27.0, "rad s-1", "rotor speed Ω", minimum=1.0, maximum=200.0),
     "arm_radius": Param(0.40, "m", "R0: hub centre to the hole centre on the support arm",
-                        minimum=0.0, exclusive_minimum=True, maximum=5.0),
+                        minimum=0.01, maximum=5.0),
     "cm_offset": Param(0.05, "m", "Rm: tuning mass hole centre to its centre of mass",
                        minimum=0.0, maximum=1.0),
-    "tuning_mass": Param(13.6, "kg", "tuning mass m_b of one bifilar", minimum=0.0,
-                         exclusive_minimum=True, maximum=500.0),
+    "tuning_mass": Param(13.6, "kg", "tuning mass m_b of one bifilar", minimum=0.1,
+                         maximum=500.0),
     "pin_mass": Param(0.5, "kg", "mass of one pin m_p", minimum=0.0, maximum=50.0),
-    "pin_diameter": Param(0.030, "m", "pin diameter d", minimum=0.0, exclusive_minimum=True,
-                          maximum=0.5),
+    "pin_diameter": Param(0.030, "m", "pin diameter d", minimum=0.001, maximum=0.5),
     "pin_inertia": Param(5.6e-5, "kg m2", "polar moment of inertia of one pin I_p",
                          minimum=0.0, maximum=1.0),
 }
@@ -75,17 +74,19 @@ HARDWARE: dict[str, Param] = {
 PARAMETERS: dict[str, Param] = {
     "hole": HARDWARE["hole"],
     "hole_diameter": Param(0.0, "m", "circular hole diameter D (0: size from tuning_order)",
-                           minimum=0.0),
+                           minimum=0.0, maximum=2.0),
     **{name: HARDWARE[name] for name in ("tuning_order", "hub_speed", "arm_radius",
                                          "cm_offset", "tuning_mass", "pin_mass",
                                          "pin_diameter", "pin_inertia")},
     "amplitude": Param(10.0, "degree", "release angle (pin angle φ for circles; turn of the "
                        "path tangent from the vertex otherwise)", minimum=0.0, maximum=60.0),
-    "periods": Param(4.0, "1", "simulated duration in linear periods", minimum=1.0),
-    "steps_per_period": Param(400, "1", "time steps per linear period", minimum=16),
+    "periods": Param(4.0, "1", "simulated duration in linear periods", minimum=1.0,
+                     maximum=1000.0),
+    "steps_per_period": Param(400, "1", "time steps per linear period", minimum=16,
+                              maximum=100000),
     "scheme": Param("ep", "1", "time integration scheme", choices=("ep", "ed", "galpha")),
     "pin_damping": Param(0.0, "N m s rad-1", "rolling resistance: torque per relative pin "
-                         "rotation rate", minimum=0.0),
+                         "rotation rate", minimum=0.0, maximum=100.0),
 }
 
 # What a run returns; the sweep archive keeps the scalar results and the histories marked

@@ -108,6 +108,48 @@ def _offset(h: Holes, sigma: NDArray) -> NDArray:
     return pin - 0.5 * g.pin_diameter * n
 
 
+def check_geometry(g: Geometry, d_hole: float, tuning_order: float | None = None) -> None:
+    """Cross-parameter plausibility of a bifilar; :class:`ParameterError` naming the parameters.
+
+    The pin must be narrower than the arm that carries it and fit in its hole; the hole on the
+    support arm (centred at R0) must lie in the arm's outer half, ``D ≤ R0`` (a larger hole
+    would cut through the hub); a pin's polar inertia cannot exceed that of a thin tube of the
+    same mass and diameter, ``I_p ≤ m_p d²/4``.
+
+    Parameters
+    ----------
+    g
+        The bifilar dimensions.
+    d_hole
+        Equivalent circular hole diameter D (m), given or sized from ``tuning_order``.
+    tuning_order
+        The target order D was sized for, if any (named in the message).
+    """
+    sized = (f" (sized by Eq. 7 for tuning_order = {tuning_order:g})"
+             if tuning_order is not None else "")
+    if not g.pin_diameter < g.arm_radius:
+        raise ParameterError(
+            f"pin_diameter = {g.pin_diameter:g} m must be smaller than arm_radius = "
+            f"{g.arm_radius:g} m: a pin cannot be wider than the arm that carries it")
+    if not d_hole > g.pin_diameter:
+        raise ParameterError(f"hole_diameter = {d_hole:g} m{sized} must exceed pin_diameter = "
+                             f"{g.pin_diameter:g} m (the pin must fit in the hole)")
+    if d_hole > g.arm_radius:
+        n_min = g.order_circular(g.arm_radius)
+        raise ParameterError(
+            f"hole_diameter = {d_hole:g} m{sized} exceeds arm_radius = {g.arm_radius:g} m with "
+            f"pin_diameter = {g.pin_diameter:g} m: the tracking hole must lie in the outer half "
+            "of the support arm (D ≤ R0), a larger one cuts through the hub"
+            + (f"; tuning_order = {tuning_order:g} is unreachable with this arm, need ≥ "
+               f"{n_min:.3g}" if tuning_order is not None else ""))
+    tube = g.pin_mass * g.pin_diameter**2 / 4.0
+    if g.pin_inertia > tube * (1.0 + 1e-12):
+        raise ParameterError(
+            f"pin_inertia = {g.pin_inertia:g} kg m2 exceeds pin_mass * pin_diameter**2 / 4 = "
+            f"{tube:g} kg m2 (pin_mass = {g.pin_mass:g} kg, pin_diameter = "
+            f"{g.pin_diameter:g} m), the polar inertia of a thin tube, the most a pin can have")
+
+
 def design(shape: str, geometry: Geometry, tuning_order: float | None = None,
            hole_diameter: float | None = None) -> Holes:
     """Holes of ``shape`` tuned to ``tuning_order`` (Eq. 7 with pins), or with the circle
@@ -130,17 +172,8 @@ def design(shape: str, geometry: Geometry, tuning_order: float | None = None,
                                                 g.pin_diameter, g.tuning_mass, g.pin_mass,
                                                 g.pin_inertia)
     d_hole = float(hole_diameter)
-    if not d_hole > g.pin_diameter:
-        raise ParameterError(f"hole_diameter = {d_hole:g} m must exceed pin_diameter = "
-                             f"{g.pin_diameter:g} m (the pin must fit in the hole)")
+    check_geometry(g, d_hole, tuning_order)
     rho = d_hole - g.pin_diameter
-    if rho >= g.arm_radius:
-        n_min = g.order_circular(g.pin_diameter + g.arm_radius)
-        raise ParameterError(
-            f"pendulum length D - d = {rho:g} m must be smaller than arm_radius = "
-            f"{g.arm_radius:g} m (hole reaching past the hub centre); "
-            + (f"tuning_order = {tuning_order:g} is unreachable, need > {n_min:.3g}"
-               if tuning_order is not None else f"hole_diameter = {d_hole:g} m is too large"))
     order = g.order_circular(d_hole)
     big_r = g.arm_radius + g.cm_offset
     r_v = big_r + rho

@@ -38,6 +38,7 @@ from solver.timefunctions import linear
 from studies.bifilar import HARDWARE, BifilarParts, add_bifilar, pin_angle
 from studies.holes import Geometry, design
 from studies.parameters import ModelSpec, Output, Param, ParameterError
+from studies.progress import report
 
 Z = np.array([0.0, 0.0, 1.0])
 N_BIFILARS = 4
@@ -55,21 +56,23 @@ PARAMETERS: dict[str, Param] = {
     "hole": HARDWARE["hole"],
     "hub_speed": HARDWARE["hub_speed"],
     "fuselage_stiffness_scale": Param(1.0, "1", "scale on the nominal fuselage stiffness",
-                                      minimum=0.0, exclusive_minimum=True, maximum=100.0),
+                                      minimum=0.01, maximum=100.0),
     "fuselage_stiffness": Param(1.015e7, "N m-1", "nominal in-plane fuselage stiffness at the "
-                                "hub", minimum=0.0, exclusive_minimum=True),
+                                "hub", minimum=1e4, maximum=1e10),
     "fuselage_damping_ratio": Param(0.02, "1", "damping ratio of the nominal fuselage mode",
                                     minimum=0.0, maximum=1.0),
     "shaft_mass": Param(300.0, "kg", "effective non-rotating mass of the shaft head",
-                        minimum=0.0, exclusive_minimum=True),
-    "rotor_mass": Param(716.0, "kg", "rotor mass (hub and 4 blades)", minimum=0.0,
-                        exclusive_minimum=True),
+                        minimum=1.0, maximum=1e5),
+    "rotor_mass": Param(716.0, "kg", "rotor mass (hub and 4 blades)", minimum=1.0,
+                        maximum=1e5),
     "excitation_3p": Param(1500.0, "N", "amplitude of the 3P rotating-frame hub shear",
-                           minimum=0.0),
+                           minimum=0.0, maximum=1e6),
     "excitation_5p": Param(1000.0, "N", "amplitude of the 5P rotating-frame hub shear",
-                           minimum=0.0),
-    "phase_3p": Param(0.0, "degree", "phase of the 3P hub shear"),
-    "phase_5p": Param(0.0, "degree", "phase of the 5P hub shear"),
+                           minimum=0.0, maximum=1e6),
+    "phase_3p": Param(0.0, "degree", "phase of the 3P hub shear", minimum=-360.0,
+                      maximum=360.0),
+    "phase_5p": Param(0.0, "degree", "phase of the 5P hub shear", minimum=-360.0,
+                      maximum=360.0),
     **{name: HARDWARE[name] for name in ("arm_radius", "cm_offset", "tuning_mass", "pin_mass",
                                          "pin_diameter", "pin_inertia")},
     "pin_damping_ratio": Param(0.01, "1", "pendulum damping ratio from rolling resistance",
@@ -241,6 +244,9 @@ def run(params: dict[str, Any]) -> xr.Dataset:
                 change = float(np.max(np.abs(cur - prev)[:, live] / scale[live]))
                 if change <= p["periodic_tolerance"]:
                     transient = rev + 1
+                report(f"revolution {rev + 1} of at most {p['max_revolutions']}: periodicity "
+                       f"change {change:.2e}, tolerance {p['periodic_tolerance']:g}"
+                       + (" (periodic: recording)" if transient is not None else ""))
             prev = cur
             if transient is None and rev + 1 >= p["max_revolutions"]:
                 raise RuntimeError(f"response not periodic after {p['max_revolutions']} "

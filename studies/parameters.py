@@ -87,14 +87,18 @@ class Param:
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise ParameterError(
                 f"{name} = {value!r}: expected a number in {self.describe_range()}")
+        try:
+            as_float = float(value)
+        except OverflowError:  # an integer too large for a float
+            as_float = math.inf
+        if not math.isfinite(as_float):
+            raise ParameterError(f"{name} = {value!r}: must be finite, in {self.describe_range()}")
         if kind is int:
-            if float(value) != int(value):
+            if as_float != int(value):
                 raise ParameterError(f"{name} = {value!r}: expected a whole number")
             value = int(value)
         else:
-            value = float(value)
-        if not math.isfinite(value):
-            raise ParameterError(f"{name} = {value!r}: must be finite, in {self.describe_range()}")
+            value = as_float
         low_bad = self.minimum is not None and (
             value <= self.minimum if self.exclusive_minimum else value < self.minimum
         )
@@ -249,6 +253,11 @@ class ModelSpec:
     the declared ``outputs`` (filled with :func:`output_dataset`).
     ``check(params)`` raises :class:`ParameterError` for combinations that are individually
     valid but physically impossible (e.g. a pin wider than its hole); it runs before any case.
+
+    ``version`` is the model's own version string. It is part of every case id
+    (:func:`pipelines.sweep.make_case_id`, together with the package version): bump it when a
+    change to the model changes its results, and the cases cached in an output directory by the
+    previous version are computed again instead of being reused.
     """
 
     name: str
@@ -258,6 +267,7 @@ class ModelSpec:
     description: str = ""
     extra: dict[str, Any] = field(default_factory=dict)
     outputs: Mapping[str, Output] = field(default_factory=dict)
+    version: str = "1"
 
     def __post_init__(self) -> None:
         check_outputs(self.outputs)

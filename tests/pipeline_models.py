@@ -31,6 +31,7 @@ import numpy as np
 import xarray as xr
 
 from studies.parameters import ModelSpec, Output, Param, ParameterError
+from studies.progress import report
 from studies.registry import register
 
 HUB_MASS = 500.0  # kg, hub and rotor in-plane effective mass
@@ -171,6 +172,7 @@ def run(params: dict[str, Any]) -> xr.Dataset:
         with open(params["run_log"], "a") as log:
             log.write(json.dumps(params, sort_keys=True) + "\n")
     time.sleep(params["delay"])
+    report(f"steady state of {params['revolutions']} revolution(s) in closed form")
     if params["fail"] == "raise":
         raise RuntimeError("failure requested by the test (fail = 'raise')")
     rate = growth_rate(params)

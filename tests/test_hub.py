@@ -83,7 +83,7 @@ def test_archive_is_cf_and_plots_exist(table1):
     paths = plot_archive(run_dir / "archive.nc", run_dir / "plots")
     assert any(p.suffix == ".png" for p in paths) and any(p.suffix == ".pdf" for p in paths)
     assert all(p.stat().st_size > 1000 for p in paths)
-    assert ds.attrs["Conventions"].startswith("CF-1.11")
+    assert ds.attrs["Conventions"] == "CF-1.8"
     for key in ("title", "source", "history", "study"):
         assert ds.attrs.get(key), key
     for name, var in ds.variables.items():

@@ -28,6 +28,7 @@ from click.testing import CliRunner
 
 from pipelines import cli
 from pipelines.archive import (
+    CONVENTIONS,
     FLAG_MEANINGS,
     STATUS_FAILED,
     STATUS_NOT_RUN,
@@ -42,6 +43,7 @@ from pipelines.sweep import (
     consolidate_study,
     load_study,
     make_case_id,
+    model_version,
     run_case,
     run_sweep,
 )
@@ -270,7 +272,7 @@ def cases_archive(scheduler, tmp_path_factory):
 
 
 def assert_cf(ds: xr.Dataset, study: Path) -> None:
-    assert ds.attrs["Conventions"] == "CF-1.11"
+    assert ds.attrs["Conventions"] == CONVENTIONS
     assert ds.attrs["title"] == "test study"
     assert ds.attrs["source"].startswith("bifilar ")
     assert ds.attrs["study"] == study.read_text()
@@ -316,9 +318,10 @@ def test_cartesian_sweep_archive(sweep_archive):
             cos, sin = expected_rotating(params)
             np.testing.assert_allclose(case["hub_displacement_rotating_cos"], cos, atol=1e-15)
             np.testing.assert_allclose(case["hub_displacement_rotating_sin"], sin, atol=1e-15)
-            assert str(case["case_id"].values) == make_case_id(spec.name, params)
+            assert str(case["case_id"].values) == make_case_id(spec.name, params,
+                                                               model_version(spec))
         # the tuned absorber removes most of the 4P force (3P/5P rotating)
-        force4 = ds["hub_force_fixed"].sel(harmonic=4, direction="x", fuselage_stiffness_scale=1)
+        force4 = ds["hub_force_fixed"].sel(harmonic=4, direction=0, fuselage_stiffness_scale=1)
         assert force4.sel(tuning_order=3.0) < 0.5 * force4.sel(tuning_order=2.8)
 
 
@@ -408,7 +411,8 @@ tuning_order = [2.5, 2.75, 3.0, 3.25, 3.5, 3.75]
               [runs_before:]]
     spec = models.SPEC
     recomputed = sorted(make_case_id(spec.name, spec.complete(
-        {"delay": 1.0, "run_log": str(log), "tuning_order": t})) + ".nc" for t in reruns)
+        {"delay": 1.0, "run_log": str(log), "tuning_order": t}), model_version(spec)) + ".nc"
+        for t in reruns)
     assert recomputed == sorted(set(after) - set(before))  # each missing case exactly once
     with xr.open_dataset(path) as ds:
         assert (ds["status"] == STATUS_OK).all()
