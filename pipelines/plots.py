@@ -9,14 +9,22 @@ Which figures are drawn is generated from the model's output declarations
 (:class:`studies.parameters.Output`; the archive's ``model`` attribute names the model). Figures
 written by :func:`plot_archive` for a per-rev periodic model (the hub):
 
+``compare_case<i>_vs_case<j>``
+    For a case list, the paired comparisons (:func:`comparison_pairs`: the reference case 1
+    against each other case, Table 1's 0 vs 1, 1 vs 2, 1 vs 3): one panel per in-plane vector,
+    the two cases' bars side by side.
 ``harmonics_<vector>``
-    Grouped bars of the per-rev harmonic amplitudes 0..8, one bar per case, for every declared
-    in-plane vector (the hub displacement in the rotating frame, Fig. 17; the hub in-plane force
-    in the fixed frame, Figs. 18–19; …). For a Cartesian sweep of more than
-    :data:`MAX_BAR_CASES` cases: ``harmonics_<vector>_vs_<parameter>``, the dominant harmonic
-    amplitudes against the first swept parameter, one line per value of the others.
+    Grouped bars of the harmonics that matter for the vector's frame (:func:`frame_harmonics`:
+    3P and 5P rotating, 4P and 8P fixed; x and y as groups), one bar per case, for every
+    declared in-plane vector (the hub displacement in the rotating frame, Fig. 17; the hub
+    in-plane force in the fixed frame, Figs. 18–19; …); a line of text gives the largest of the
+    other harmonics. A Cartesian sweep with a numeric dimension (or of more than
+    :data:`MAX_BAR_CASES` cases) gets response curves instead:
+    ``harmonics_<vector>_vs_<parameter>``, those harmonics' amplitudes against the first numeric
+    swept parameter, one line per value of the others.
 ``<figure>`` of the declarations, over one revolution
-    Vectors as orbits (``orbits``: hub and bifilar centre of mass, Fig. 15); a history with an
+    Vectors as smooth orbits (``orbits``: hub and bifilar centre of mass, Fig. 15; Fourier
+    interpolation of the archived revolution); a history with an
     extra dimension as one panel per case (``pin_angles``, Fig. 14; cases where it is zero
     throughout, e.g. locked bifilars, are left out); other histories as one panel each with one
     line per case (``hub_force_history``, Fig. 16).
@@ -41,11 +49,20 @@ import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 
-from pipelines.archive import STATUS_OK, ArchiveError, open_archive, status_counts
+from pipelines.archive import STATUS_OK, ArchiveError, _upsample, open_archive, status_counts
 from studies.parameters import ModelSpec, Output
+
+Cases = list[tuple[str, dict[str, int], bool]]
 
 # More bars than this per harmonic group are unreadable: a sweep switches to line plots.
 MAX_BAR_CASES = 8
+# Harmonics drawn for a four-bladed rotor: either side of 4P in the rotating frame, 4P and its
+# double in the fixed frame (the others are summarized in a line of text).
+ROTATING_HARMONICS = (3, 5)
+FIXED_HARMONICS = (4, 8)
+# Points of a drawn orbit (Fourier interpolation of the archived revolution: smooth, exact for
+# the band-limited periodic signal).
+ORBIT_POINTS = 720
 # Cases per time-history figure (one panel each for pin angles, one line each otherwise).
 CASES_PER_PAGE = 8
 FORMATS = ("png", "pdf")
@@ -138,28 +155,110 @@ def _colors(n: int) -> list[Any]:
     return [cmap(i if n <= 10 else i / max(n - 1, 1)) for i in range(n)]
 
 
+def frame_harmonics(name: str) -> tuple[int, ...]:
+    """The harmonics that matter for a quantity of a four-bladed rotor: 3P and 5P in the
+    rotating frame (either side of 4P), 4P and 8P in the fixed frame."""
+    return ROTATING_HARMONICS if "rotating" in name or name.startswith("pin_angle") else (
+        FIXED_HARMONICS)
+
+
+def _rest_summary(var: xr.DataArray, shown: Sequence[int], scale: float, units: str) -> str:
+    """One line on the harmonics left out of a chart: the largest of them, against the shown."""
+    harmonic = list(var["harmonic"].values)
+    rest = [h for h in harmonic if h not in shown]
+    if not rest:
+        return ""
+    values = np.abs(var.transpose(..., "harmonic").values)
+    finite = np.where(np.isfinite(values), values, 0.0).reshape(-1, len(harmonic))
+    peak_shown = max(finite[:, harmonic.index(h)].max() for h in shown)
+    peaks = {h: finite[:, harmonic.index(h)].max() for h in rest}
+    worst = max(peaks, key=lambda h: peaks[h])
+    share = peaks[worst] / peak_shown if peak_shown > 0 else np.inf
+    return (f"not shown: harmonics {', '.join(map(str, rest))}; largest {worst}P "
+            f"{peaks[worst] * scale:.3g} {units}"
+            + (f" ({100 * share:.2g} % of the largest shown)" if np.isfinite(share) else ""))
+
+
+def _bar_panel(ax: Any, ds: xr.Dataset, name: str, cases: Cases, shown: Sequence[int],
+               scale: float, colors: Sequence[Any]) -> None:
+    """Grouped bars: one group per (harmonic, direction), one bar per case."""
+    var = ds[name]
+    groups = [(h, d) for h in shown for d in ds["direction"].values]
+    width = 0.8 / len(cases)
+    x = np.arange(len(groups))
+    for i, (label, sel, _ok) in enumerate(cases):
+        amp = [float(var.isel(sel).sel(direction=d, harmonic=h)) * scale for h, d in groups]
+        ax.bar(x - 0.4 + (i + 0.5) * width, amp, width, label=label, color=colors[i],
+               edgecolor="black", linewidth=0.5)
+    ax.set_xticks(x, [f"{h}P {d}" for h, d in groups])
+    ax.grid(True, axis="y", alpha=0.3)
+    ax.set_ylim(bottom=0)
+
+
 def _harmonic_bars(ds: xr.Dataset, name: str, title: str, out_dir: Path,
                    formats: Sequence[str]) -> list[Path]:
     cases = _cases(ds)
     var = ds[name]
     scale, units = _display_units(var.attrs.get("units", ""), var.values)
-    harmonic = ds["harmonic"].values
-    width = 0.8 / len(cases)
-    fig = Figure(figsize=(9, 6.5), layout="constrained")
-    axes = fig.subplots(ds.sizes["direction"], 1, sharex=True, squeeze=False)[:, 0]
-    colors = _colors(len(cases))
-    for ax, direction in zip(axes, ds["direction"].values, strict=True):
-        for i, (label, sel, _ok) in enumerate(cases):
-            amp = var.isel(sel).sel(direction=direction).values * scale
-            ax.bar(harmonic - 0.4 + (i + 0.5) * width, amp, width, label=label,
-                   color=colors[i], edgecolor="black", linewidth=0.5)
-        ax.set_ylabel(f"{direction} amplitude ({units})")
-        ax.grid(True, axis="y", alpha=0.3)
-    axes[-1].set_xticks(harmonic)
-    axes[-1].set_xlabel("harmonic (cycles per rotor revolution)")
+    shown = [h for h in frame_harmonics(name) if h in ds["harmonic"].values]
+    fig = Figure(figsize=(9, 5.5), layout="constrained")
+    ax = fig.subplots()
+    _bar_panel(ax, ds, name, cases, shown, scale, _colors(len(cases)))
+    ax.set_ylabel(f"amplitude ({units})")
+    ax.set_xlabel("harmonic (cycles per rotor revolution) and in-plane direction\n"
+                  + _rest_summary(var, shown, scale, units), fontsize="small")
     fig.suptitle(title)
-    _legend(fig, axes[0])
+    _legend(fig, ax)
     return _save(fig, out_dir, f"harmonics_{name}", formats)
+
+
+def comparison_pairs(ds: xr.Dataset) -> list[tuple[int, int]]:
+    """The paired comparisons of a case list: the reference case (the second, e.g. Table 1's
+    case 1, free and tuned) against every other case: (0, 1), (1, 2), (1, 3), ..."""
+    if _case_dims(ds) != ("case",) or ds.sizes["case"] < 2:
+        return []
+    return [(min(i, 1), max(i, 1)) for i in range(ds.sizes["case"]) if i != 1]
+
+
+def _comparison(ds: xr.Dataset, spec: ModelSpec, pair: tuple[int, int], out_dir: Path,
+                formats: Sequence[str]) -> list[Path]:
+    """One figure per pair: the frame harmonics of every vector, the two cases side by side."""
+    cases = _cases(ds)
+    chosen = [cases[i] for i in pair]
+    names = [n for n, d in spec.outputs.items() if d.is_vector and n in ds]
+    if not names or not all(ok for *_, ok in chosen):
+        return []
+    cols = 2 if len(names) > 1 else 1
+    rows = -(-len(names) // cols)
+    fig = Figure(figsize=(5.6 * cols, 1.6 + 3.3 * rows), layout="constrained")
+    axes = fig.subplots(rows, cols, squeeze=False).ravel()
+    colors = _colors(2)
+    for ax, name in zip(axes, names, strict=False):
+        var = ds[name]
+        scale, units = _display_units(var.attrs.get("units", ""), var.values)
+        shown = [h for h in frame_harmonics(name) if h in ds["harmonic"].values]
+        _bar_panel(ax, ds, name, chosen, shown, scale, colors)
+        ax.set_ylabel(f"amplitude ({units})")
+        ax.set_title(spec.outputs[name].long_name, fontsize="medium", wrap=True)
+        sub = var.isel(case=list(pair))
+        ax.set_xlabel(_rest_summary(sub, shown, scale, units).replace("; ", "\n", 1),
+                      fontsize="x-small", color="0.3")
+    for ax in axes[len(names):]:
+        ax.set_visible(False)
+    fig.suptitle(f"Case {chosen[0][0]} against case {chosen[1][0]}")
+    _legend(fig, axes[0])
+    return _save(fig, out_dir, f"compare_case{pair[0]}_vs_case{pair[1]}", formats)
+
+
+def _response_dim(ds: xr.Dataset) -> str | None:
+    """The first numeric swept dimension of a Cartesian sweep (drawn as response curves)."""
+    dims = _case_dims(ds)
+    if dims == ("case",):
+        return None
+    for dim in dims:
+        if np.issubdtype(ds[dim].dtype, np.number) and ds.sizes[dim] > 1:
+            return dim
+    return None
 
 
 def _dominant_harmonics(values: np.ndarray, harmonic: np.ndarray, count: int = 2) -> list[int]:
@@ -173,13 +272,14 @@ def _dominant_harmonics(values: np.ndarray, harmonic: np.ndarray, count: int = 2
 def _harmonic_lines(ds: xr.Dataset, name: str, title: str, out_dir: Path,
                     formats: Sequence[str], chosen: Sequence[int] | None) -> list[Path]:
     dims = _case_dims(ds)
-    first, others = dims[0], dims[1:]
+    first = _response_dim(ds) or dims[0]
+    others = tuple(d for d in dims if d != first)
     var = ds[name]
     scale, units = _display_units(var.attrs.get("units", ""), var.values)
     # NaN where a case failed; the line then has a gap rather than a false value.
     values = var.where(ds["status"] == STATUS_OK)
-    picks = list(chosen) if chosen else _dominant_harmonics(
-        var.transpose(..., "harmonic").values, ds["harmonic"].values)
+    picks = list(chosen) if chosen else [h for h in frame_harmonics(name)
+                                         if h in ds["harmonic"].values]
     x = ds[first].values
     xattrs = dict(ds[first].attrs)
     combos = list(itertools.product(*(range(ds.sizes[d]) for d in others)))
@@ -204,9 +304,6 @@ def _harmonic_lines(ds: xr.Dataset, name: str, title: str, out_dir: Path,
     fig.suptitle(f"{title} against {first}")
     _legend(fig, axes[0, 0])
     return _save(fig, out_dir, f"harmonics_{name}_vs_{first}", formats)
-
-
-Cases = list[tuple[str, dict[str, int], bool]]
 
 
 def _time_axis(ds: xr.Dataset, sel: dict[str, int]) -> tuple[np.ndarray, str]:
@@ -249,7 +346,7 @@ def _indexed_history(ds: xr.Dataset, name: str, stem: str, cases: Cases, out_dir
                 ax.plot(x, values.sel({index: item}).values, styles[k % len(styles)],
                         color=_colors(ds.sizes[index])[k], label=f"{index} {_format(item)}")
             ax.set_title(label, fontsize="medium")
-            ax.set_ylabel(_axis_label(var.attrs, name) if units else name)
+            ax.set_ylabel(units or name)
             _finish_axis(ax, ds)
         axes[-1].set_xlabel(xlabel)
         _legend(fig, axes[0])
@@ -279,8 +376,10 @@ def _orbits(ds: xr.Dataset, vectors: dict[str, Output], stem: str, cases: Cases,
             for (label, sel, _ok), color in zip(chunk, colors, strict=True):
                 x = ds[cx].isel(sel).values * scale
                 y = ds[cy].isel(sel).values * scale
-                if "psi" in ds.coords:
-                    # Close the periodic orbit: the last revolution ends where it began.
+                if "psi" in ds.coords and np.isfinite(x).all() and np.isfinite(y).all():
+                    # Smooth and closed: Fourier interpolation of the periodic revolution.
+                    x = _upsample(x, max(ORBIT_POINTS, x.size))
+                    y = _upsample(y, max(ORBIT_POINTS, y.size))
                     x, y = np.append(x, x[0]), np.append(y, y[0])
                 ax.plot(x, y, color=color, label=label)
             ax.set_aspect("equal", adjustable="datalim")
@@ -441,7 +540,10 @@ def plot_archive(
     out.mkdir(parents=True, exist_ok=True)
     paths: list[Path] = []
     if spec.periodic:
-        lines = _case_dims(ds) != ("case",) and len(cases) > MAX_BAR_CASES
+        lines = _response_dim(ds) is not None or (
+            _case_dims(ds) != ("case",) and len(cases) > MAX_BAR_CASES)
+        for pair in comparison_pairs(ds):
+            paths += _comparison(ds, spec, pair, out, formats)
         for name, decl in spec.outputs.items():
             if not decl.is_vector or name not in ds:
                 continue

@@ -534,6 +534,9 @@ def test_cli_run_sweeps_and_plots(scheduler, tmp_path, monkeypatch):
         assert {f"{stem}.png", f"{stem}.pdf"} <= names
     assert all(p.parent == tmp_path / "res" / "plots" and p.stat().st_size > 1000
                for p in paths)
+    # the paired comparisons (reference case 1 against each other case; case 2 failed)
+    assert {"compare_case0_vs_case1.png", "compare_case1_vs_case3.png"} <= names
+    assert "compare_case1_vs_case2.png" not in names
 
 
 def test_large_sweep_plots_lines_against_first_parameter(sweep_archive, tmp_path):
