@@ -284,25 +284,29 @@ def _harmonic_lines(ds: xr.Dataset, name: str, title: str, out_dir: Path,
     xattrs = dict(ds[first].attrs)
     combos = list(itertools.product(*(range(ds.sizes[d]) for d in others)))
     colors = _colors(len(combos))
-    fig = Figure(figsize=(10, 3.2 * len(picks) + 1.2), layout="constrained")
-    axes = fig.subplots(len(picks), ds.sizes["direction"], squeeze=False, sharex=True)
-    for row, k in enumerate(picks):
-        for col, direction in enumerate(ds["direction"].values):
-            ax = axes[row, col]
+    # x and y of one harmonic share a panel (solid and dashed): for a circular whirl they
+    # coincide, and two identical panels would say nothing more
+    fig = Figure(figsize=(6 * len(picks), 5.2), layout="constrained")
+    axes = fig.subplots(1, len(picks), squeeze=False)[0]
+    styles = ("-", "--", ":", "-.")
+    for ax, k in zip(axes, picks, strict=True):
+        for d, direction in enumerate(ds["direction"].values):
             for combo, color in zip(combos, colors, strict=True):
                 sel = dict(zip(others, combo, strict=True))
                 y = values.isel(sel).sel(direction=direction, harmonic=k).transpose(first).values
-                label = ", ".join(f"{d}={_format(ds[d].values[i])}" for d, i in sel.items())
-                if label and not np.isfinite(y).any():
+                label = ", ".join([f"{dd}={_format(ds[dd].values[i])}" for dd, i in sel.items()]
+                                  + [str(direction)])
+                if not np.isfinite(y).any():
                     label += " (failed)"
-                ax.plot(x, y * scale, marker="o", color=color, label=label or None)
-            ax.set_title(f"{k}P, {direction}", fontsize="medium")
-            ax.set_ylabel(f"amplitude ({units})")
-            ax.grid(True, alpha=0.3)
-    for ax in axes[-1]:
+                ax.plot(x, y * scale, styles[d % len(styles)], marker="o" if d == 0 else "s",
+                        mfc="none" if d else color, color=color, label=label)
+        ax.set_title(f"{k}P", fontsize="medium")
+        ax.set_ylabel(f"amplitude ({units})")
         ax.set_xlabel(_axis_label(xattrs, first))
+        ax.grid(True, alpha=0.3)
+        ax.set_ylim(bottom=0)
     fig.suptitle(f"{title} against {first}")
-    _legend(fig, axes[0, 0])
+    _legend(fig, axes[0])
     return _save(fig, out_dir, f"harmonics_{name}_vs_{first}", formats)
 
 
