@@ -59,7 +59,13 @@ import dask.config
 import numpy as np
 import xarray as xr
 
-from studies.harmonics import N_MAX, case_harmonics, harmonic_names, recording_layout
+from studies.harmonics import (
+    N_MAX,
+    case_harmonics,
+    copy_coords,
+    harmonic_names,
+    recording_layout,
+)
 from studies.parameters import ModelSpec
 
 CONVENTIONS = "CF-1.8"
@@ -247,7 +253,7 @@ def case_summary(ds: xr.Dataset, spec: ModelSpec, n_max: int = N_MAX) -> xr.Data
                      "comment": "last recorded revolution, from azimuth psi = 0"}
             out[name] = ((*other, "time_in_rev"),
                          _one_revolution(var.values.astype(float), n, psi_last), attrs)
-            out = _copy_coords(out, ds, other)
+            out = copy_coords(out, ds, other)
         if histories:
             out = out.assign_coords(psi=_psi_coord(n), time_in_rev=_time_in_rev_coord(n))
         out["run_hub_speed"] = ((), omega, {"units": "rad s-1", "long_name": "rotor speed"})
@@ -268,7 +274,7 @@ def case_summary(ds: xr.Dataset, spec: ModelSpec, n_max: int = N_MAX) -> xr.Data
             out[name] = ((*other, "sample"), var.values,
                          {"units": units, "long_name": long_name,
                           "comment": "whole time history; shorter cases are padded with NaN"})
-            out = _copy_coords(out, ds, other)
+            out = copy_coords(out, ds, other)
         if histories:
             decl = spec.outputs.get("time")
             time_attrs = decl.attrs() if decl is not None else {"units": "s", "long_name": "time"}
@@ -279,21 +285,6 @@ def case_summary(ds: xr.Dataset, spec: ModelSpec, n_max: int = N_MAX) -> xr.Data
         out[name] = ((), ds[name].values, {"units": units, "long_name": long_name})
     renames = {d: _renamed(d, spec) for d in out.dims if _renamed(d, spec) != d}
     return out.rename(renames) if renames else out
-
-
-def _copy_coords(out: xr.Dataset, ds: xr.Dataset, dims: tuple[str, ...]) -> xr.Dataset:
-    """Coordinates of the extra output dimensions ``dims`` (an index if the model gave none)."""
-    for dim in dims:
-        if dim in out.coords:
-            continue
-        if dim in ds.coords:
-            coord = ds[dim].variable.copy()
-            coord.attrs = {"units": "1", "long_name": f"{dim} index", **coord.attrs}
-        else:
-            coord = xr.Variable(dim, np.arange(ds.sizes[dim]),
-                                {"units": "1", "long_name": f"{dim} index"})
-        out = out.assign_coords({dim: coord})
-    return out
 
 
 def _sample_coord(samples: int) -> xr.Variable:

@@ -298,14 +298,21 @@ def case_harmonics(ds: xr.Dataset, outputs: Mapping[str, Output],
                 values,
                 {"units": decl.units, "long_name": f"{decl.long_name}, {what}"},
             )
-        for dim in other:
-            if dim in out.coords:
-                continue
-            if dim in ds.coords:
-                coord = ds[dim].variable.copy()
-                coord.attrs = {"units": "1", "long_name": f"{dim} index", **coord.attrs}
-            else:
-                coord = xr.Variable(dim, np.arange(var.sizes[dim]),
-                                    {"units": "1", "long_name": f"{dim} index"})
-            out = out.assign_coords({dim: coord})
+        out = copy_coords(out, ds, other)
+    return out
+
+
+def copy_coords(out: xr.Dataset, ds: xr.Dataset, dims: tuple[str, ...]) -> xr.Dataset:
+    """Coordinates of the extra output dimensions ``dims`` taken from ``ds`` (an index with
+    units "1" if the model gave none)."""
+    for dim in dims:
+        if dim in out.coords:
+            continue
+        if dim in ds.coords:
+            coord = ds[dim].variable.copy()
+            coord.attrs = {"units": "1", "long_name": f"{dim} index", **coord.attrs}
+        else:
+            coord = xr.Variable(dim, np.arange(ds.sizes[dim]),
+                                {"units": "1", "long_name": f"{dim} index"})
+        out = out.assign_coords({dim: coord})
     return out
