@@ -122,14 +122,19 @@ class RigidBody(Element):
 
     def quadratic_rows(self, qb: QuadraticBuilder, lay) -> tuple[NDArray[np.int64], dict]:
         """Six orthonormality rows d_α·d_β − δ_αβ = 0."""
-        o = lay.offset[self]
-        rows = qb.new_rows(6)
-        d = [VecExpr([(1.0, o + 3 + 3 * a)]) for a in range(3)]
-        for r, (a, c) in zip(rows, [(0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (2, 0)], strict=True):
-            qb.add_dot(int(r), d[a], d[c])
-            if a == c:
-                qb.add_constant(int(r), -1.0)
-        return rows, {}
+        return orthonormality_rows(qb, lay.offset[self]), {}
+
+
+def orthonormality_rows(qb: QuadraticBuilder, o: int) -> NDArray[np.int64]:
+    """The six rows d_α·d_β − δ_αβ = 0 of the directors at coordinates o+3 … o+11 (a rigid
+    body or a beam node: position first, then d1, d2, d3)."""
+    rows = qb.new_rows(6)
+    d = [VecExpr([(1.0, o + 3 + 3 * a)]) for a in range(3)]
+    for r, (a, c) in zip(rows, [(0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (2, 0)], strict=True):
+        qb.add_dot(int(r), d[a], d[c])
+        if a == c:
+            qb.add_constant(int(r), -1.0)
+    return rows
 
 
 @dataclass(eq=False)

@@ -49,6 +49,9 @@ class StateBlock:
         ``size × size`` array; ``None`` is zero (algebraic blocks must leave it ``None``).
     units, long_name
         Of the unknowns, for results.
+    parts
+        Sub-owners addressed inside this block, with their local offsets (a beam's nodes, each
+        12 coordinates x, d1, d2, d3 that joints and loads attach to like a rigid body's).
     """
 
     owner: object
@@ -59,6 +62,7 @@ class StateBlock:
     mass: Array | None = None
     units: str = "1"
     long_name: str = ""
+    parts: dict | None = None
 
     def __post_init__(self) -> None:
         if self.kind not in KINDS:
@@ -96,6 +100,8 @@ class Layout:
         kinds = []
         for b in ordered:
             self.offset[b.owner] = n
+            for part, local in (b.parts or {}).items():
+                self.offset[part] = n + local
             n += b.size
             kinds += [KINDS.index(b.kind)] * b.size
         self.n = n
