@@ -61,6 +61,10 @@ class Element:
         """Elements of one ``set_class`` with equal keys are evaluated by one set."""
         return ()
 
+    def parts(self) -> list[Element]:
+        """Elements assembled with this one (a beam's nodes); none by default."""
+        return []
+
 
 class ElementSet:
     """All elements of one class (and group key) in a model, evaluated together.

@@ -16,8 +16,8 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import ArrayLike, NDArray
 
-from solver.bodies import Body, PointMass, PrescribedBody, RigidBody
-from solver.element import Element, ElementSet
+from solver.bodies import Body, PointMass, PrescribedBody
+from solver.element import EMPTY_F, Element, ElementSet
 from solver.quadratic import VecExpr
 
 Array = NDArray[np.float64]
@@ -359,7 +359,7 @@ class AppliedLoad(Element):
             raise ValueError(f"load {self.name!r}: a point mass cannot take a moment")
 
     def group_key(self) -> Hashable:
-        return isinstance(self.body, (RigidBody, PrescribedBody))
+        return not isinstance(self.body, PointMass)  # bodies and beam nodes: directors
 
 
 class AppliedLoadSet(ElementSet):
@@ -370,7 +370,7 @@ class AppliedLoadSet(ElementSet):
 
     def __init__(self, elements, system) -> None:
         super().__init__(elements, system)
-        self.rigid = isinstance(elements[0].body, (RigidBody, PrescribedBody))
+        self.rigid = not isinstance(elements[0].body, PointMass)
         width = 12 if self.rigid else 3
         self.idx = np.array([system.offset[e.body] + np.arange(width) for e in elements])
         self.local = np.array([
@@ -379,6 +379,12 @@ class AppliedLoadSet(ElementSet):
             for e in elements])
         self.force_idx = self.idx.ravel()
         self._zero = np.zeros(3)
+        # moments as director forces ½ M × d_α: ∂f_α/∂d_α = ½ skew(M) (3 × 3 per director)
+        self._moment = [k for k, e in enumerate(elements) if e.moment is not None and self.rigid]
+        if self._moment:
+            d = self.idx[self._moment][:, 3:].reshape(-1, 3, 3)  # load, director, component
+            self.fq_rows = np.repeat(d, 3, axis=2).ravel()
+            self.fq_cols = np.tile(d, (1, 1, 3)).ravel()
 
     def force(self, q, v, t):
         nj, width = self.idx.shape
@@ -395,6 +401,13 @@ class AppliedLoadSet(ElementSet):
                 # f_α = ½ M × d_α gives Σ d_α × f_α = M (moment as director forces)
                 out[:, 3:] += 0.5 * np.cross(m[:, None, :], d).reshape(nj, 9)
         return out.ravel()
+
+    def force_jacobians(self, q, v, t):
+        if not self._moment:
+            return EMPTY_F, EMPTY_F
+        m = np.array([np.asarray(self.elements[k].moment(t), dtype=float) for k in self._moment])
+        sk = 0.5 * np.array([[[0, -c, b], [c, 0, -a], [-b, a, 0]] for a, b, c in m])
+        return np.repeat(sk[:, None], 3, axis=1).ravel(), EMPTY_F
 
 
 AppliedLoad.set_class = AppliedLoadSet

@@ -32,7 +32,9 @@ class System:
     """The assembled model: what the integrators need, vectorized."""
 
     def __init__(self, model) -> None:
-        elements = list(model.elements)
+        # a beam brings its nodes (elements with their own constraint rows)
+        elements = [p for e in model.elements for p in (e, *e.parts())]
+        self.elements = elements
         self.model = model
         self.bodies = [e for e in elements if isinstance(e, BODY_TYPES)]
         names = [b.name for b in self.bodies]
