@@ -498,3 +498,98 @@ def arc_beam(name: str, center: ArrayLike, radius: float, start: ArrayLike, angl
     tan = np.sign(angle) * (-np.sin(th)[:, None] * u + np.cos(th)[:, None] * w)
     frames = _frames_along(tan, nrm, np.zeros_like(s), owner)
     return Beam(name, pts, frames, sections, **kw)
+
+
+# ------------------------------------------------------------------------ distributed loads
+@dataclass(eq=False)
+class DistributedLoad(Element):
+    """Dead distributed force (N/m) and moment (N·m/m) along a beam, global components.
+
+    ``force`` and ``moment`` are functions ``(s, t) -> (len(s), 3)`` of the arc length s (m)
+    and time t (s). They are integrated against the shape functions (consistent nodal loads)
+    on the beam's mass quadrature; the moment acts as director forces ½ m × d_i, the virtual
+    work of m·δφ with δφ = ½ Σ d_i × δd_i.
+    """
+
+    name: str
+    beam: Beam
+    force: Callable[[Array, float], ArrayLike] | None = None
+    moment: Callable[[Array, float], ArrayLike] | None = None
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.beam, Beam):
+            raise TypeError(f"distributed load {self.name!r}: beam must be a Beam")
+        if self.force is None and self.moment is None:
+            raise ValueError(f"distributed load {self.name!r}: give a force or a moment")
+
+
+class DistributedLoadSet(ElementSet):
+    """Consistent nodal loads of distributed loads, vectorized over quadrature points."""
+
+    nonconservative = True
+
+    def __init__(self, elements, system) -> None:
+        super().__init__(elements, system)
+        self.parts = []
+        idx, fq_r, fq_c = [], [], []
+        for ld in elements:
+            b = ld.beam
+            quad = b.quadrature(b.mass_points)
+            n, _, wds = b._geometry(quad)
+            el_idx = (system.offset[b] + 36 * quad["element"][:, None, None]
+                      + 12 * np.arange(4)[None, :, None] + np.arange(12))  # (G, 4, 12)
+            self.parts.append((ld, quad["s"], n, n * wds[:, None], el_idx))
+            idx.append(el_idx.ravel())
+            if ld.moment is not None:
+                d = el_idx[:, :, 3:].reshape(-1, 4, 3, 3)  # G, node a, director, comp
+                # ∂f(d_i,a)/∂d_i,b: rows (a, i, comp r), cols (b, i, comp c)
+                r = np.broadcast_to(d[:, :, None, :, :, None], (len(d), 4, 4, 3, 3, 3))
+                c = np.broadcast_to(d[:, None, :, :, None, :], (len(d), 4, 4, 3, 3, 3))
+                fq_r.append(r.ravel())
+                fq_c.append(c.ravel())
+        self.force_idx = np.concatenate(idx)
+        self.fq_rows = np.concatenate(fq_r) if fq_r else self.fq_rows
+        self.fq_cols = np.concatenate(fq_c) if fq_c else self.fq_cols
+
+    @staticmethod
+    def _field(fun, s, t, what, name) -> Array:
+        a = np.asarray(fun(s, t), dtype=float)
+        if a.shape != (len(s), 3) or not np.all(np.isfinite(a)):
+            raise ValueError(f"distributed load {name!r}: {what}(s, t) must return finite "
+                             f"values of shape {(len(s), 3)}, got {a.shape}")
+        return a
+
+    def force(self, q, v, t):
+        out = []
+        for ld, s, n, nw, el_idx in self.parts:
+            f = np.zeros((*el_idx.shape[:2], 4, 3))  # G, node, (x, d1, d2, d3), comp
+            if ld.force is not None:
+                fd = self._field(ld.force, s, t, "force", ld.name)
+                f[:, :, 0] = nw[:, :, None] * fd[:, None]
+            if ld.moment is not None:
+                m = self._field(ld.moment, s, t, "moment", ld.name)
+                dq = q[el_idx[:, :, 3:]].reshape(-1, 4, 3, 3)
+                d = np.einsum("ga,gaic->gic", n, dq)
+                # director force density ½ m × d_i (d_i interpolated), times N_a w ds
+                fd = 0.5 * np.cross(m[:, None, :], d)  # G, i, comp
+                f[:, :, 1:] += nw[:, :, None, None] * fd[:, None]
+            out.append(f.ravel())
+        return np.concatenate(out)
+
+    def force_jacobians(self, q, v, t):
+        out = []
+        for ld, s, n, nw, _ in self.parts:
+            if ld.moment is None:
+                continue
+            m = self._field(ld.moment, s, t, "moment", ld.name)
+            sk = np.zeros((len(m), 3, 3))
+            sk[:, 0, 1], sk[:, 0, 2], sk[:, 1, 2] = -m[:, 2], m[:, 1], -m[:, 0]
+            sk -= np.swapaxes(sk, 1, 2)
+            # f(d_i,a) = ½ N_a w m × Σ_b N_b d_i,b: block (a, b) = ½ w N_a N_b skew(m)
+            nn = nw[:, :, None] * n[:, None, :]
+            blk = 0.5 * nn[:, :, :, None, None, None] * sk[:, None, None, None, :, :]
+            out.append(np.broadcast_to(blk, (len(m), 4, 4, 3, 3, 3)).ravel())
+        return (np.concatenate(out) if out else np.zeros(0)), np.zeros(0)
+
+
+DistributedLoad.set_class = DistributedLoadSet

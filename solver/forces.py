@@ -16,6 +16,7 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import ArrayLike, NDArray
 
+from solver.beams import Beam
 from solver.bodies import Body, PointMass, PrescribedBody
 from solver.element import EMPTY_F, Element, ElementSet
 from solver.quadratic import VecExpr
@@ -42,7 +43,7 @@ def _outer_pattern(idx: NDArray[np.int64]) -> tuple[NDArray[np.int64], NDArray[n
 # ------------------------------------------------------------------------------- gravity
 @dataclass(eq=False)
 class Gravity(Element):
-    """Uniform gravity field g (m/s²) acting on every free body of the model."""
+    """Uniform gravity field g (m/s²) acting on every free body and beam of the model."""
 
     g: ArrayLike = (0.0, 0.0, -9.81)
     name: str = "gravity"
@@ -61,6 +62,17 @@ class GravitySet(ElementSet):
             o = system.offset[body]
             idx.extend(range(o, o + 3))
             val.extend(-body.mass * g)
+        for beam in system.elements:
+            if isinstance(beam, Beam):
+                # V = −g·∫ρ r dV with r = x + ξ_α d_α: the mass matrix applied to a uniform
+                # translation g gives ∫N_a ρA g on x_a and ∫N_a S_α g on d_α,a
+                o = system.offset[beam]
+                nb = 12 * len(beam.nodes)
+                m = system.M[o : o + nb, o : o + nb]
+                u = np.zeros((len(beam.nodes), 4, 3))
+                u[:, 0] = g
+                idx.extend(range(o, o + nb))
+                val.extend(-(m @ u.ravel()))
         self.grad_idx = np.array(idx, dtype=np.int64)
         self._val = np.array(val)
 
