@@ -47,12 +47,17 @@ def _director_mass(mass: float, e: NDArray[np.float64] | None) -> NDArray[np.flo
     return out
 
 
+# which of a body's 12 coordinates (x, d1, d2, d3) form its position 3-vector
+BODY_POSITIONS = np.repeat([True, False, False, False], 3)
+
+
 def _director_state(body, x, r, v, w, e) -> StateBlock:
     """The 12 coordinates (x, d1, d2, d3) of a body with rotation r (d_α = column α)."""
     return StateBlock(body, SECOND, 12, initial=np.concatenate([x, np.asarray(r).T.ravel()]),
                       rate=np.concatenate([v, np.cross(w, np.asarray(r).T).ravel()]),
                       mass=_director_mass(body.mass, e), units="m",
-                      long_name=f"position and directors of {body.name}")
+                      long_name=f"position and directors of {body.name}",
+                      positions=BODY_POSITIONS)
 
 
 @dataclass(eq=False)
@@ -156,7 +161,7 @@ class PointMass(Element):
     def states(self) -> list[StateBlock]:
         return [StateBlock(self, SECOND, 3, initial=self.position, rate=self.velocity,
                            mass=_director_mass(self.mass, None), units="m",
-                           long_name=f"position of {self.name}")]
+                           long_name=f"position of {self.name}", positions=np.ones(3, bool))]
 
 
 @dataclass(eq=False)

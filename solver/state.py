@@ -14,6 +14,12 @@ Three kinds of unknowns, each integrated consistently by every scheme:
 An element declares its blocks with :class:`StateBlock`; :class:`Layout` numbers them: second-
 order blocks first (in declaration order, so body coordinates form consecutive 3-vectors),
 then algebraic scalars, then first-order states. Nothing is written into the declarations.
+
+Second-order blocks are consecutive 3-vectors of two geometric types, which a rigid motion of
+the whole model moves differently: *positions* (a body's centre, a point mass, a beam node)
+rotate about a point and translate, *directors* (a body's or a beam node's d1, d2, d3) only
+rotate. :attr:`StateBlock.positions` says which is which (used by relative equilibria and
+linearization in a rotating frame, :mod:`solver.equilibrium`, :mod:`solver.modes`).
 """
 
 from __future__ import annotations
@@ -52,6 +58,13 @@ class StateBlock:
     parts
         Sub-owners addressed inside this block, with their local offsets (a beam's nodes, each
         12 coordinates x, d1, d2, d3 that joints and loads attach to like a rigid body's).
+    positions
+        Second-order blocks only: per coordinate (or per 3-vector), whether it belongs to a
+        position 3-vector (True) or to a director (False). Default: all positions for a
+        block of 3 (a point mass); for a block of 12·k coordinates, k groups laid out as
+        (x, d1, d2, d3), so the first 3 of every 12 are positions (rigid bodies, beam nodes);
+        other sizes must set it. Stored as a boolean array of length ``size`` (``None`` if
+        not known); all False for first-order and algebraic blocks.
     """
 
     owner: object
@@ -63,6 +76,7 @@ class StateBlock:
     units: str = "1"
     long_name: str = ""
     parts: dict | None = None
+    positions: ArrayLike | None = None
 
     def __post_init__(self) -> None:
         if self.kind not in KINDS:
@@ -72,6 +86,7 @@ class StateBlock:
         self.initial = np.broadcast_to(np.asarray(self.initial, dtype=float),
                                        (self.size,)).copy()
         self.rate = np.broadcast_to(np.asarray(self.rate, dtype=float), (self.size,)).copy()
+        self.positions = _position_mask(self.kind, self.size, self.positions)
 
 
 class Layout:
@@ -87,6 +102,11 @@ class Layout:
         Per unknown, the index into :data:`KINDS` (0 second, 1 algebraic, 2 first order).
     second, algebraic, first
         Index arrays of the unknowns of each kind.
+    is_position
+        Per unknown, whether it is a component of a position 3-vector (see
+        :attr:`StateBlock.positions`); second-order unknowns that are not are directors.
+    unclassified
+        Second-order blocks whose :attr:`StateBlock.positions` is unknown (their owners).
     """
 
     def __init__(self, blocks: list[StateBlock]) -> None:
@@ -110,6 +130,14 @@ class Layout:
         self.algebraic = np.nonzero(self.kind == 1)[0]
         self.first = np.nonzero(self.kind == 2)[0]
         self.n_second_coordinates = len(self.second)
+        self.is_position = np.zeros(n, dtype=bool)
+        self.unclassified = []
+        for b in ordered:
+            if b.positions is None:
+                self.unclassified.append(b.owner)
+            else:
+                o = self.offset[b.owner]
+                self.is_position[o : o + b.size] = b.positions
 
     def initial(self) -> tuple[Array, Array]:
         """Declared initial values and rates."""
@@ -139,6 +167,27 @@ class Layout:
                                                            _cat(cols, np.int64))),
                                      shape=(self.n, self.n)))
         return out[0], out[1]
+
+
+def _position_mask(kind: str, size: int, given: ArrayLike | None) -> NDArray[np.bool_] | None:
+    """The per-coordinate position mask of a block (see :attr:`StateBlock.positions`)."""
+    if kind != SECOND:
+        if given is not None and np.any(given):
+            raise ValueError(f"only second-order blocks hold positions (kind {kind!r})")
+        return np.zeros(size, dtype=bool)
+    if given is None:
+        if size == 3:
+            return np.ones(3, dtype=bool)
+        if size % 12 == 0:  # (x, d1, d2, d3) groups: rigid bodies, beam nodes
+            return np.tile(np.repeat([True, False, False, False], 3), size // 12)
+        return None
+    m = np.asarray(given, dtype=bool).reshape(-1)
+    if size % 3 == 0 and m.shape == (size // 3,):
+        m = np.repeat(m, 3)
+    if size % 3 or m.shape != (size,) or np.any(m.reshape(-1, 3) != m.reshape(-1, 3)[:, :1]):
+        raise ValueError(f"positions must flag whole 3-vectors of a second-order block of "
+                         f"{size} coordinates (length {size} or {size // 3})")
+    return m
 
 
 def _cat(parts: list, dtype) -> np.ndarray:
