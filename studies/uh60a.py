@@ -150,6 +150,11 @@ def parse_dymore(text: str) -> dict[str, list[list[Value]]]:
     tokens = _TOKEN.findall(re.sub(r"![^\n]*", "", text))
     pos = 0
 
+    def skip_blank() -> None:  # whitespace between a keyword and its groups
+        nonlocal pos
+        while pos < len(tokens) and tokens[pos][2] and not tokens[pos][2].strip():
+            pos += 1
+
     def block(depth: int) -> tuple[dict[str, list[list[Value]]], str]:
         nonlocal pos
         out: dict[str, list[list[Value]]] = {}
@@ -159,15 +164,12 @@ def parse_dymore(text: str) -> dict[str, list[list[Value]]]:
             pos += 1
             if key:
                 groups: list[Value] = []
-                while pos < len(tokens) and not tokens[pos][1] and not tokens[pos][0] \
-                        and not tokens[pos][2].strip():
-                    pos += 1  # whitespace before a group
+                skip_blank()
                 while pos < len(tokens) and tokens[pos][1] == "{":
                     pos += 1
                     sub, words_in = block(depth + 1)
                     groups.append(sub if sub else words_in.strip())
-                    while pos < len(tokens) and tokens[pos][2] and not tokens[pos][2].strip():
-                        pos += 1
+                    skip_blank()
                 out.setdefault(key, []).append(groups)
             elif brace == "}":
                 if depth == 0:
@@ -430,9 +432,9 @@ def blade_twist(line: Literal["aero", "structural"] = "aero") -> tuple[Array, Ar
     r, twist
         Radius (m) and twist (rad), positive nose up (a rotation about d1 turning the leading
         edge d2 towards d3), piecewise linear between points. The reference is the deck's,
-        not the root: the aero twist is 9.67° on the inboard blade, crosses zero near
-        0.69R (−0.1° at 0.7R) and is ≈ −3.6° at 0.93R — so a collective θ0 in this frame is the
-        pitch near 0.7R (next_wave.md §6).
+        not the root: the aero twist is 9.67° on the inboard blade (0.135–0.17R), crosses zero
+        at 0.69R (−0.14° at 0.7R), reaches −3.63° at 0.93R and −1.62° at the tip — so a
+        collective θ0 in this frame is the pitch near 0.7R (next_wave.md §6).
     """
     body = _named("ORIENTATION_DISTRIBUTION_DEFINITION", "ORIENTATION_DISTRIBUTION_NAME",
                   TWIST_DISTRIBUTION[line])
@@ -454,10 +456,11 @@ def _lifting_line_property() -> dict:
 def blade_chord() -> tuple[Array, Array]:
     """Chord against radius: r (m), chord (m), piecewise linear.
 
-    From ``CHORD_LENGTH_DEFINITION``: zero at the attachment, 0.5273 m from 0.134R, 0.5325 m
-    outboard of 0.43R; the 0.56–0.57 m values near 0.6–0.75R and 0.83–1.0R include the trim
-    tabs. The deck's quarter-chord offsets are all zero (the sweep of the tip is in the
-    airstation positions, :func:`blade_airstations`).
+    From ``CHORD_LENGTH_DEFINITION``: zero at the attachment, rising to 0.5273 m at 0.135R,
+    0.5325 m from 0.51R, 0.5706 m over 0.72–0.82R, 0.5273 m again over 0.86–0.92R and
+    0.53–0.56 m on the swept tip (the wider values appear to include the trim tabs). The deck's
+    quarter-chord offsets are all zero (the tip's sweep is in the airstation positions,
+    :func:`blade_airstations`).
     """
     body = _one(_lifting_line_property(), "CHORD_LENGTH_DEFINITION")
     s = np.array([_floats(v)[0] for v in _column(body, "CURVILINEAR_COORDINATE")])
@@ -516,7 +519,7 @@ def blade_airstations() -> tuple[Array, Array]:
     r, offset
         Radius (m) of the 81 airstations, and their (d2, d3) offsets from the beam reference
         line (m), (81, 2): −0.9 mm chordwise over most of the span, the aft sweep of the tip
-        (−0.16 m at the last station, r = 8.108 m), and a few mm of droop/prebend; d2 positive
+        (−0.16 m at the last station, r = 8.108 m), and −7 to +11 mm along d3; d2 positive
         towards the leading edge.
     """
     ll = _named("LIFTING_LINE_DEFINITION", "LIFTING_LINE_NAME", LIFTING_LINE)
