@@ -135,9 +135,10 @@ class Beam(Element):
     velocity, angular_velocity, about
         Initial rigid motion (m/s, rad/s, m): ẋ = v + ω × (x − about), ḋ_i = ω × d_i.
         Projected onto the constraints before the first step.
-    node_velocities
-        Optional extra initial velocities of the nodes (m/s), (n_nodes, 3), e.g. to start a
-        bending vibration.
+    node_velocities, node_angular_velocities
+        Optional extra initial velocities (m/s) and angular velocities (rad/s) of the nodes,
+        (n_nodes, 3) each, e.g. to start a bending vibration with consistent section
+        rotation rates.
     stiffness_points, mass_points
         Gauss points per segment for the internal force (3: reduced, recommended) and for
         the mass matrix (4).
@@ -151,6 +152,7 @@ class Beam(Element):
     angular_velocity: ArrayLike = (0.0, 0.0, 0.0)
     about: ArrayLike = (0.0, 0.0, 0.0)
     node_velocities: ArrayLike | None = None
+    node_angular_velocities: ArrayLike | None = None
     stiffness_points: int = 3
     mass_points: int = 4
     nodes: list[BeamNode] = field(init=False, repr=False)
@@ -197,11 +199,12 @@ class Beam(Element):
             if a.shape != (3,) or not np.all(np.isfinite(a)):
                 raise ValueError(f"{owner}: {k} must be 3 finite numbers, got {v!r}")
             setattr(self, k, a)
-        if self.node_velocities is not None:
-            nv = np.asarray(self.node_velocities, dtype=float)
-            if nv.shape != x.shape or not np.all(np.isfinite(nv)):
-                raise ValueError(f"{owner}: node_velocities must be finite, shape {x.shape}")
-            self.node_velocities = nv
+        for k in ("node_velocities", "node_angular_velocities"):
+            if getattr(self, k) is not None:
+                nv = np.asarray(getattr(self, k), dtype=float)
+                if nv.shape != x.shape or not np.all(np.isfinite(nv)):
+                    raise ValueError(f"{owner}: {k} must be finite, shape {x.shape}")
+                setattr(self, k, nv)
 
     # -- declarations -----------------------------------------------------------------------
     def parts(self) -> list[Element]:
@@ -277,6 +280,8 @@ class Beam(Element):
         rate[:, 0] = self.velocity + np.cross(w, self.points - self.about)
         if self.node_velocities is not None:
             rate[:, 0] += self.node_velocities
+        if self.node_angular_velocities is not None:
+            rate[:, 1:] += np.cross(self.node_angular_velocities[:, None, :], q[:, 1:])
         return [StateBlock(self, SECOND, 12 * nn, initial=q.ravel(), rate=rate.ravel(),
                            mass=self.mass_matrix(), units="m",
                            long_name=f"node positions and directors of beam {self.name}",
@@ -368,11 +373,12 @@ Beam.set_class = BeamSet
 def section_loads(system, beam: Beam, q: Array, s: ArrayLike) -> Array:
     """Stress resultants (N, V2, V3, T, M2, M3) at arc lengths ``s`` (m) of ``beam``.
 
-    Components are in the section frame (d1, d2, d3) at that point: axial force N, shear
-    forces V2, V3 (N), torsion T and bending moments M2, M3 (N·m) — the material stress
-    resultants S = C (e − e0). At an element end the strains of the cubic interpolation are
-    one order less accurate than at its Gauss points; at a constrained end the joint reaction
-    is the exact load.
+    Components are in the section frame (d1, d2, d3): axial force N, shear forces V2, V3 (N),
+    torsion T and bending moments M2, M3 (N·m) — the material stress resultants
+    S = C (e − e0). They are evaluated at the three Gauss points of each element, where the
+    strains of the cubic interpolation are superconvergent (exact for a linear shear and a
+    quadratic moment), and interpolated by the quadratic through them to ``s``, element ends
+    included. At a constrained end the joint reaction is the exact load.
 
     Returns
     -------
@@ -384,21 +390,29 @@ def section_loads(system, beam: Beam, q: Array, s: ArrayLike) -> Array:
                          f"{beam.length:.6g} m, got {s.tolist()}")
     e = np.clip(np.searchsorted(beam.element_ends, s, side="right") - 1, 0, beam.n_elements - 1)
     s0, s1 = beam.element_ends[e], beam.element_ends[e + 1]
-    quad = {"element": e, "xi": -1.0 + 2.0 * (s - s0) / (s1 - s0), "s": s, "w": np.zeros_like(s)}
+    xi = -1.0 + 2.0 * (s - s0) / (s1 - s0)
+    xg = np.polynomial.legendre.leggauss(3)[0]
+    el = np.repeat(e, 3)
+    quad = {"element": el, "xi": np.tile(xg, len(s)), "s": np.repeat(s0, 3) + (np.tile(xg, len(s))
+            + 1) / 2 * np.repeat(s1 - s0, 3), "w": np.zeros(3 * len(s))}
     n, dn, _ = beam._geometry(quad)
     h = strain_matrices(n, dn)
-    o = system.offset[beam]
-    qv = q[o + 36 * e[:, None] + np.arange(48)].reshape(-1, 16, 3)
-    ref = beam.reference_coordinates().ravel()
-    qr = ref[36 * e[:, None] + np.arange(48)].reshape(-1, 16, 3)
+    local = 36 * el[:, None] + np.arange(48)
+    qv = q[system.offset[beam] + local].reshape(-1, 16, 3)
+    qr = beam.reference_coordinates().ravel()[local].reshape(-1, 16, 3)
 
     def strains(v):
         return 0.5 * np.einsum("gkab,gab->gk", h, v @ np.swapaxes(v, 1, 2))
 
-    side = np.where(s >= beam.length * (1 - 1e-12), "left", "right")
-    c = np.array([beam.sections.at(si, side=sd)["stiffness"] for si, sd in zip(s, side,
-                                                                                 strict=True)])
-    return np.einsum("gkl,gl->gk", c, strains(qv) - strains(qr))
+    c = beam.sections.at(quad["s"])["stiffness"]
+    stress = np.einsum("gkl,gl->gk", c, strains(qv) - strains(qr)).reshape(len(s), 3, 6)
+    # quadratic Lagrange interpolation through the Gauss points
+    lag = np.ones((len(s), 3))
+    for a in range(3):
+        for b in range(3):
+            if a != b:
+                lag[:, a] *= (xi - xg[b]) / (xg[a] - xg[b])
+    return np.einsum("ga,gak->gk", lag, stress)
 
 
 # ---------------------------------------------------------------------------- factories
