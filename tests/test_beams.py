@@ -10,11 +10,12 @@ import numpy as np
 import pytest
 
 from solver.beams import DistributedLoad, arc_beam, lagrange, section_loads, straight_beam
-from solver.bodies import ground
-from solver.equilibrium import equilibrium
+from solver.bodies import ground, spinning
+from solver.equilibrium import Spin, equilibrium
 from solver.forces import AppliedLoad, Gravity
 from solver.joints import Rigid
 from solver.model import Model
+from solver.modes import natural_frequencies
 from solver.sections import SectionTable, isotropic_section
 from solver.simulation import simulate
 from solver.system import System
@@ -209,3 +210,38 @@ def test_beam_dynamics_second_order(scheme):
     err = [np.linalg.norm(tip(h) - ref) for h in (2e-3, 1e-3, 5e-4)]
     ratios = np.array(err[:-1]) / np.array(err[1:])
     assert np.all((ratios > 3.2) & (ratios < 4.6)), ratios
+
+
+ROTATING_TABLE = {  # λ: flap 1, 2, 3 (ω*), Wright et al. 1982 / next_wave.md §1.3 (e)
+    0: (3.5160, 22.0345, 61.6972),
+    2: (4.1373, 22.6149, 62.2732),
+    6: (7.3604, 26.8091, 66.6839),
+    12: (13.1702, 37.6031, 79.6145),
+}
+
+
+@pytest.mark.parametrize("lam", sorted(ROTATING_TABLE))
+def test_rotating_cantilever_frequencies(lam):
+    """Uniform cantilever on a hub spinning at λ = Ω√(mL⁴/EI) (zero hub radius), linearized
+    about its steady spin: flap frequencies against the published table and lag 1 against
+    the exact √(flap1² − λ²). Slender section (EA = GA = 10⁶ EI/L², rotary inertia 10⁻⁷),
+    8 elements; measured worst relative error 5e-4 (lag 1 at λ = 12; flap ≤ 3e-4)."""
+    sec = isotropic_section(EA=1e6, GA2=1e6, GA3=1e6, GJ=1.0, EI2=1.0, EI3=1.0, mass=1.0,
+                            i22=1e-7, i33=1e-7)
+    hub = spinning("hub", float(lam))
+    b = straight_beam("b", (0, 0, 0), (1, 0, 0), sec, n_elements=8,
+                      angular_velocity=(0, 0, lam))
+    model = Model([hub, b, Rigid("clamp", hub, b.root, point=(0, 0, 0))])
+    md = natural_frequencies(model, spin=Spin(float(lam), (0, 0, 1)) if lam else None)
+    omega = 2 * np.pi * md.frequency
+    s = System(model)
+    o = s.offset[b]
+    x_rows = o + 12 * np.arange(len(b.nodes))
+    shapes = np.abs(md.shapes)
+    flap = (shapes[x_rows + 2] ** 2).sum(axis=0) > (shapes[x_rows + 1] ** 2).sum(axis=0)
+    moving = omega > 1e-6
+    flaps = omega[flap & moving][:3]
+    lag1 = omega[~flap & moving][0]
+    ref = np.array(ROTATING_TABLE[lam])
+    assert np.abs(flaps / ref - 1).max() < 6e-4, flaps
+    assert lag1 == pytest.approx(np.sqrt(ref[0] ** 2 - lam**2), rel=1e-3)
