@@ -5,6 +5,7 @@
     bifilar sweep STUDY.toml --out DIR [--workers N | --scheduler ADDRESS] [--retry-failed]
     bifilar plot ARCHIVE --out DIR [--format png --format pdf]
     bifilar run [--out DIR] [--workers N | --scheduler ADDRESS]
+    bifilar fanplot [--speeds RAD_PER_S ...] --out FILE.nc
 
 Exit status: 0 when every case of the study finished ok; 1 when the sweep finished but some
 cases failed or did not run (the archive is still written, and the last line on stderr says how
@@ -30,6 +31,7 @@ import click
 
 from pipelines.archive import ArchiveError, code_version, open_archive, status_counts
 from pipelines.checks import InputError, check_output_dir, check_scheduler_address
+from pipelines.fanplot_command import fanplot
 from pipelines.study_commands import collar, pendulum
 from pipelines.sweep import CASES_DIR, StudyError, SweepError, run_sweep
 from studies.parameters import ParameterError
@@ -257,6 +259,7 @@ def run(ctx: click.Context, out_dir: Path, workers: int | None, scheduler: str |
 # The validation studies: `bifilar collar` (paper Figs. 10-12) and `bifilar pendulum` (Eq. 7).
 main.add_command(collar)
 main.add_command(pendulum)
+main.add_command(fanplot)
 
 
 # --- end of single-model commands ---------------------------------------------------------------

@@ -1,0 +1,192 @@
+"""The articulated UH-60A blade as a multibody model, and its fan plot.
+
+The blade (``studies.uh60a``: Yeo's section properties with the Davis cuff) is a
+geometrically exact beam of cubic elements from the hinge to the tip, on a hub spinning about
++z (counter-clockwise seen from above, as the UH-60A). The hinge arrangement is the one of
+``../shared/notes/next_wave.md`` §2.1: flap and lag revolutes at one point e = 0.381 m, flap
+first going outboard, joined by a massless link; the pitch bearing is locked (rigid pitch link,
+the reference arrangement for the published frequencies), and the lag hinge has neither damper
+nor spring (undamped frequencies).
+
+The fan plot (Campbell diagram) is the set of natural frequencies of the linearized model about
+its steady spin at each rotor speed (:func:`solver.modes.natural_frequencies`, rotating frame).
+Each mode is named by its dominant motion — flap (out of the rotor plane), lag (in the plane),
+torsion (section rotation about the blade axis) or axial — measured by the share of its
+kinetic energy, and numbered by frequency within its family.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+from numpy.typing import ArrayLike, NDArray
+
+from solver.beams import Beam, straight_beam
+from solver.bodies import RigidBody, spinning
+from solver.equilibrium import Spin, equilibrium
+from solver.joints import Revolute
+from solver.model import Model
+from solver.modes import Modes, natural_frequencies
+from solver.system import System
+from studies.uh60a import UH60A, blade_sections, blade_twist, section_origin
+
+Array = NDArray[np.float64]
+FAMILIES = ("flap", "lag", "torsion", "axial")
+FANPLOT_MODES = ("flap 1", "flap 2", "flap 3", "flap 4", "lag 1", "lag 2", "torsion 1")
+DEFAULT_SPEED_RATIOS = np.round(np.arange(0.0, 1.21, 0.1), 10)  # of Ω_ref = 27 rad/s
+
+
+def articulated_blade(speed: float, *, n_elements: int = 6, twist: bool = True) -> tuple[
+        Model, Beam]:
+    """One articulated UH-60A blade on a hub spinning at ``speed`` (rad/s) about +z.
+
+    Parameters
+    ----------
+    speed
+        Rotor speed Ω (rad/s), ≥ 0.
+    n_elements
+        Cubic beam elements from the hinge to the tip (the paper uses 6).
+    twist
+        Include the built-in structural twist of the section axes (couples flap, lag and
+        torsion); without it the blade's section axes are those of the rotor plane.
+
+    Returns
+    -------
+    (model, beam)
+    """
+    if not (np.isfinite(speed) and speed >= 0):
+        raise ValueError(f"rotor speed = {speed!r} rad/s must be ≥ 0")
+    if not (isinstance(n_elements, int | np.integer) and 1 <= n_elements <= 60):
+        raise ValueError(f"n_elements = {n_elements!r} must be an integer in 1…60")
+    e = section_origin(include_cuff=True)  # hinge radius (m): the beam starts there
+    hinge = np.array([e, 0.0, 0.0])
+    if twist:
+        r_tw, tw = blade_twist("structural")
+
+        def twist_of(s):
+            return np.interp(np.asarray(s) + e, r_tw, tw)
+    else:
+        twist_of = None
+    hub = spinning("hub", float(speed))
+    blade = straight_beam("blade", hinge, (UH60A.radius, 0.0, 0.0), blade_sections(),
+                          n_elements=n_elements, e3=(0.0, 0.0, 1.0), twist=twist_of,
+                          angular_velocity=(0.0, 0.0, speed))
+    # flap hinge about the chordwise axis (y at azimuth 0), then the lag hinge about z,
+    # joined by a massless link whose rotation both hinges fix
+    link = RigidBody("flap_link", 0.0, position=hinge, angular_velocity=(0.0, 0.0, speed))
+    model = Model([
+        hub, link, blade,
+        Revolute("flap", hub, link, point=hinge, axis=(0.0, 1.0, 0.0)),
+        Revolute("lag", link, blade.root, point=hinge, axis=(0.0, 0.0, 1.0)),
+    ])
+    return model, blade
+
+
+def classify(modes: Modes, system: System, beam: Beam) -> list[str]:
+    """Label each mode of ``modes`` ('flap 1', 'lag 2', 'torsion 1', …) by its dominant
+    motion on ``beam``: the share of kinetic energy in out-of-plane (z), in-plane (y) and
+    axial (x) node translation and in section rotation about the blade axis."""
+    o = system.offset[beam]
+    nb = 12 * len(beam.nodes)
+    m = system.M[o : o + nb, o : o + nb].toarray()
+    phi = modes.shapes[o : o + nb]  # (12 n, modes)
+    comp = np.arange(nb).reshape(-1, 4, 3)
+    energies = []
+    for sel in (comp[:, 0, 2], comp[:, 0, 1], None, comp[:, 0, 0]):
+        if sel is None:  # directors, minus what the bending slopes account for (small)
+            sel = comp[:, 1:, :].ravel()
+        mm = m[np.ix_(sel, sel)]
+        p = phi[sel]
+        energies.append(np.real(np.einsum("im,ij,jm->m", p.conj(), mm, p)))
+    family = np.argmax(np.array(energies), axis=0)
+    count = dict.fromkeys(FAMILIES, 0)
+    labels = []
+    for k in np.argsort(modes.frequency, kind="stable"):
+        fam = FAMILIES[family[k]]
+        count[fam] += 1
+        labels.append((k, f"{fam} {count[fam]}"))
+    out = [""] * len(labels)
+    for k, lab in labels:
+        out[k] = lab
+    return out
+
+
+def fanplot(speeds: ArrayLike | None = None, *, n_elements: int = 6,
+            modes: tuple[str, ...] = FANPLOT_MODES) -> xr.Dataset:
+    """Natural frequencies of the articulated UH-60A blade against rotor speed.
+
+    Parameters
+    ----------
+    speeds
+        Rotor speeds Ω (rad/s), each ≥ 0; default 0 … 1.2 Ω_ref in steps of 0.1 Ω_ref.
+    n_elements
+        Beam elements, hinge to tip.
+    modes
+        Mode labels to report.
+
+    Returns
+    -------
+    xarray.Dataset
+        ``frequency`` (Hz) over (``hub_speed`` (rad s-1), ``mode``) with the coordinate
+        ``mode_label``; NaN where a mode was not found among the computed ones.
+    """
+    sp = (UH60A.omega_ref * DEFAULT_SPEED_RATIOS if speeds is None
+          else np.atleast_1d(np.asarray(speeds, dtype=float)))
+    if sp.ndim != 1 or not len(sp) or not np.all(np.isfinite(sp)) or np.any(sp < 0):
+        raise ValueError(f"speeds = {speeds!r} must be rotor speeds ≥ 0 rad/s")
+    freq = np.full((len(sp), len(modes)), np.nan)
+    for i, omega in enumerate(sp):
+        model, beam = articulated_blade(float(omega), n_elements=n_elements)
+        s = System(model)
+        spin = Spin(float(omega), (0.0, 0.0, 1.0)) if omega else None
+        md = natural_frequencies(s, spin=spin, q0=_tensioned_start(s, beam, float(omega),
+                                                                   n_elements))
+        labels = classify(md, s, beam)
+        for j, name in enumerate(modes):
+            if name in labels:
+                freq[i, j] = md.frequency[labels.index(name)]
+    ds = xr.Dataset(coords={
+        "hub_speed": ("hub_speed", sp, {"units": "rad s-1", "long_name": "rotor speed"}),
+        "mode": ("mode", np.arange(len(modes)), {"long_name": "mode index"}),
+        "mode_label": ("mode", list(modes), {"long_name": "dominant motion of the mode"}),
+    })
+    ds["frequency"] = (("hub_speed", "mode"), freq, {
+        "units": "Hz", "long_name": "natural frequency in the rotating frame"})
+    ds.attrs.update(
+        title="UH-60A articulated blade fan plot",
+        model=(f"{n_elements} cubic geometrically exact beam elements, hinge to tip; coincident "
+               "flap/lag hinges at the hinge radius, lag hinge free, pitch link rigid; Yeo "
+               "section properties with the Davis cuff; structural twist"),
+        reference_speed=UH60A.omega_ref,
+    )
+    return ds
+
+
+def _tensioned_start(system: System, beam: Beam, speed: float, n_elements: int) -> Array:
+    """A starting configuration for the steady spin of the twisted blade: the steady state of
+    the untwisted blade, with each node's section axes turned by the twist.
+
+    Straight from the reference, Newton's first step sees a blade without centrifugal tension
+    and hence no flap stiffness, while the twisted sections' centre-of-mass offsets already
+    push out of the plane: the step is huge. The untwisted blade has no such push (its steady
+    state converges in a few iterations) and gives the tension; the twist is a rotation of
+    the section axes about d1, the same in both.
+    """
+    if speed == 0.0:
+        return system.q0_raw.copy()
+    flat_model, flat_beam = articulated_blade(speed, n_elements=n_elements, twist=False)
+    flat = System(flat_model)
+    eq = equilibrium(flat, spin=Spin(speed, (0.0, 0.0, 1.0)))
+    if not eq.converged:
+        return system.q0_raw.copy()
+    # the two models differ only in the beam's reference frames (same layout): copy the
+    # state, then turn each node's section axes by its twist
+    q = eq.q.copy()
+    o = system.offset[beam]
+    for k, node in enumerate(beam.nodes):
+        a = o + 12 * k
+        ref_flat = flat_beam.nodes[k].orientation
+        turn = ref_flat.T @ node.orientation  # twist about d1, in the section frame
+        d = eq.q[a + 3 : a + 12].reshape(3, 3).T  # columns d1 d2 d3 of the untwisted node
+        q[a + 3 : a + 12] = (d @ turn).T.ravel()
+    return q
