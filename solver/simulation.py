@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import xarray as xr
 
+from solver.beams import Beam, section_loads
 from solver.bodies import PointMass, PrescribedBody
 from solver.integrators import Integrator, make_integrator
 from solver.joints import Joint, Revolute
@@ -118,6 +119,8 @@ class _Recorder:
                                                    and b.name == "ground")]
         self.revolutes = s.model.of_type(Revolute)
         self.joints = s.model.of_type(Joint) if reactions else []
+        self.beams = s.model.of_type(Beam)
+        self.loads: list = []
         self.t, self.x, self.r, self.v, self.w = [], [], [], [], []
         self.phi, self.f, self.m, self.sc = [], [], [], []
         self._phi_prev = None
@@ -159,6 +162,9 @@ class _Recorder:
         self.f.append(fs)
         self.m.append(ms)
         self.sc.append([q[i] for i in s.scalar_index.values()])
+        if self.beams:
+            self.loads.append(np.concatenate([section_loads(s, b, q, b.node_s)
+                                              for b in self.beams]))
 
     def dataset(self) -> xr.Dataset:
         s = self.s
@@ -191,6 +197,19 @@ class _Recorder:
                                     {"units": "N", "long_name": "joint force on body_b"})
             ds["reaction_moment"] = (("time", "joint", "xyz"), np.array(self.m), {
                 "units": "N m", "long_name": "joint moment on body_b about the joint point"})
+        if self.beams:
+            ds = ds.assign_coords(
+                station_beam=("station", [b.name for b in self.beams for _ in b.nodes]),
+                station_s=("station", np.concatenate([b.node_s for b in self.beams]),
+                           {"units": "m", "long_name": "arc length along the beam"}),
+                section_axis=("section_axis", ["1", "2", "3"]))
+            loads = np.array(self.loads)
+            ds["section_force"] = (("time", "station", "section_axis"), loads[:, :, :3], {
+                "units": "N", "long_name": "beam stress resultant: axial (1) and shear (2, 3) "
+                                           "force, section frame d1 d2 d3"})
+            ds["section_moment"] = (("time", "station", "section_axis"), loads[:, :, 3:], {
+                "units": "N m", "long_name": "beam stress resultant: torsion (1) and bending "
+                                             "(2, 3) moment, section frame d1 d2 d3"})
         if s.scalar_index:
             ds = ds.assign_coords(scalar=[sc.name for sc in s.scalar_index])
             ds["scalar_value"] = (("time", "scalar"), np.array(self.sc),

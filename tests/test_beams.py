@@ -245,3 +245,22 @@ def test_rotating_cantilever_frequencies(lam):
     ref = np.array(ROTATING_TABLE[lam])
     assert np.abs(flaps / ref - 1).max() < 6e-4, flaps
     assert lag1 == pytest.approx(np.sqrt(ref[0] ** 2 - lam**2), rel=1e-3)
+
+
+def test_simulation_records_section_loads():
+    """Each beam's stress resultants at its nodes are results of a simulation, in the
+    section frame, forces (N) and moments (N·m) apart."""
+    sec = isotropic_section(EA=1e6, GA2=1e6, GA3=1e6, GJ=1e3, EI2=1e3, EI3=1e3, mass=1.0,
+                            i22=1e-3, i33=1e-3)
+    b = straight_beam("b", (0, 0, 0), (1, 0, 0), sec, n_elements=2)
+    model = clamped(b, AppliedLoad("p", b.tip, force=lambda t: (0.0, 0.0, -10.0)))
+    s = System(model)
+    sim = simulate(model, 0.01, 0.001, scheme="galpha", system=s)
+    assert sim.converged, sim.message
+    ds = sim.dataset
+    assert ds.section_moment.attrs["units"] == "N m" and ds.section_force.attrs["units"] == "N"
+    assert list(ds.station_beam.values) == ["b"] * 7
+    assert np.allclose(ds.station_s.values, b.node_s)
+    last = section_loads(s, b, sim.integrator.q, b.node_s)
+    assert np.allclose(ds.section_force.values[-1], last[:, :3])
+    assert np.allclose(ds.section_moment.values[-1], last[:, 3:])
