@@ -56,6 +56,7 @@ from numpy.typing import ArrayLike, NDArray
 from solver.bodies import PrescribedBody
 from solver.newton import LinearSolver
 from solver.rotations import rotation_about, skew
+from solver.state import SECOND
 from solver.system import System
 
 Array = NDArray[np.float64]
@@ -63,6 +64,7 @@ Array = NDArray[np.float64]
 DENSE_LIMIT = 6000  # largest Newton matrix solved densely (minimum norm) when it is singular
 DIAGNOSE_LIMIT = 2500  # largest one whose neutral direction is named in a failure message
 RESIDUAL_TOL = 1e-12  # relative force balance at which q is taken as converged at once
+MAX_TURN = 0.3  # largest director change of one Newton step (≈ rad)
 STEADY_TOL = 1e-8  # relative error allowed in the steadiness checks of a relative equilibrium
 
 
@@ -395,6 +397,7 @@ def _newton(s: System, q: Array, lam: Array | None, t: float, fld: SpinField, to
     lam = lam.copy()
     singular = False
     step = np.inf
+    directors = _director_mask(s)
     for it in range(max_iter + 1):
         r, c, g, fscale = _balance(s, q, lam, t, fld)
         if not (np.all(np.isfinite(r)) and np.all(np.isfinite(c))):
@@ -412,6 +415,12 @@ def _newton(s: System, q: Array, lam: Array | None, t: float, fld: SpinField, to
             return q, lam, it, False, ("singular equilibrium tangent (neutral or unrestrained "
                                        "directions) too large for the dense fallback")
         singular = singular or sing
+        # a damped step when directors would turn by more than MAX_TURN (rad, roughly):
+        # far from the solution (a blade without centrifugal tension yet has no flap
+        # stiffness) the full step of a linearized rotation is meaningless
+        turn = float(np.abs(dx[:n][directors]).max(initial=0.0))
+        if turn > MAX_TURN:
+            dx = dx * (MAX_TURN / turn)
         q = q + dx[:n]
         lam = lam + dx[n:]
         step = float(np.abs(dx[:n]).max(initial=0.0))
@@ -423,6 +432,16 @@ def _newton(s: System, q: Array, lam: Array | None, t: float, fld: SpinField, to
     if singular:
         msg += "; the tangent is singular" + _neutral_direction(s, q, lam, t, fld)
     return q, lam, max_iter, False, msg
+
+
+def _director_mask(s: System) -> NDArray[np.bool_]:
+    """Unknowns that are components of unit vectors (body and beam-node directors)."""
+    mask = np.zeros(s.n, dtype=bool)
+    for b in s.layout.blocks:
+        if b.kind == SECOND and b.positions is not None:
+            o = s.offset[b.owner]
+            mask[o : o + b.size] = ~np.asarray(b.positions, dtype=bool)
+    return mask
 
 
 def _relative(r: Array, c: Array, fscale: float, scale: float) -> Array:

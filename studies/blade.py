@@ -23,7 +23,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from solver.beams import Beam, straight_beam
 from solver.bodies import RigidBody, spinning
-from solver.equilibrium import Spin, equilibrium
+from solver.equilibrium import Spin
 from solver.joints import Revolute
 from solver.model import Model
 from solver.modes import Modes, natural_frequencies
@@ -139,8 +139,7 @@ def fanplot(speeds: ArrayLike | None = None, *, n_elements: int = 6,
         model, beam = articulated_blade(float(omega), n_elements=n_elements)
         s = System(model)
         spin = Spin(float(omega), (0.0, 0.0, 1.0)) if omega else None
-        md = natural_frequencies(s, spin=spin, q0=_tensioned_start(s, beam, float(omega),
-                                                                   n_elements))
+        md = natural_frequencies(s, spin=spin)
         labels = classify(md, s, beam)
         for j, name in enumerate(modes):
             if name in labels:
@@ -161,32 +160,3 @@ def fanplot(speeds: ArrayLike | None = None, *, n_elements: int = 6,
     )
     return ds
 
-
-def _tensioned_start(system: System, beam: Beam, speed: float, n_elements: int) -> Array:
-    """A starting configuration for the steady spin of the twisted blade: the steady state of
-    the untwisted blade, with each node's section axes turned by the twist.
-
-    Straight from the reference, Newton's first step sees a blade without centrifugal tension
-    and hence no flap stiffness, while the twisted sections' centre-of-mass offsets already
-    push out of the plane: the step is huge. The untwisted blade has no such push (its steady
-    state converges in a few iterations) and gives the tension; the twist is a rotation of
-    the section axes about d1, the same in both.
-    """
-    if speed == 0.0:
-        return system.q0_raw.copy()
-    flat_model, flat_beam = articulated_blade(speed, n_elements=n_elements, twist=False)
-    flat = System(flat_model)
-    eq = equilibrium(flat, spin=Spin(speed, (0.0, 0.0, 1.0)))
-    if not eq.converged:
-        return system.q0_raw.copy()
-    # the two models differ only in the beam's reference frames (same layout): copy the
-    # state, then turn each node's section axes by its twist
-    q = eq.q.copy()
-    o = system.offset[beam]
-    for k, node in enumerate(beam.nodes):
-        a = o + 12 * k
-        ref_flat = flat_beam.nodes[k].orientation
-        turn = ref_flat.T @ node.orientation  # twist about d1, in the section frame
-        d = eq.q[a + 3 : a + 12].reshape(3, 3).T  # columns d1 d2 d3 of the untwisted node
-        q[a + 3 : a + 12] = (d @ turn).T.ravel()
-    return q
