@@ -289,7 +289,14 @@ class Beam(Element):
 
 
 class BeamSet(ElementSet):
-    """Strain energy of all beams of a model, vectorized over their quadrature points."""
+    """Strain energy of all beams of a model, vectorized over their quadrature points.
+
+    Evaluation runs element by element over a padded stack of each element's points (``width``
+    slots, the most points of any element; unused slots have zero h, C and weight), so that
+    every sum over an element's points is inside one batched product: the strains use the
+    element Gram matrix Q Qᵀ, the force is (Σ_g Σ_k w S_k h_k) Q, the geometric stiffness that
+    16 × 16 sum times I3 and the material stiffness Bᵀ (wC B) over the stacked points.
+    """
 
     def __init__(self, elements, system) -> None:
         super().__init__(elements, system)
@@ -314,53 +321,81 @@ class BeamSet(ElementSet):
         self.C = np.concatenate(c)
         self.wC = self.wds[:, None, None] * self.C
         self._owner = owner
-        # quadrature points are generated element by element: segment sums per element
-        self._starts = np.searchsorted(self.el, np.arange(n_el))
-        self.e0 = np.zeros((len(self.el), 6))
-        self.e0 = self._strains(system.q0_raw)[1]  # reference strains: zero force there
+        # quadrature points are generated element by element: slot of each point in its
+        # element's padded stack
+        starts = np.searchsorted(self.el, np.arange(n_el))
+        width = int(np.diff(np.append(starts, len(self.el))).max())
+        self._slot = self.el * width + np.arange(len(self.el)) - starts[self.el]
+
+        def padded(a: Array) -> Array:
+            out = np.zeros((n_el * width, *a.shape[1:]))
+            out[self._slot] = a
+            return out
+
+        self._hp = padded(self.h.reshape(-1, 6, 256)).reshape(n_el, 6 * width, 256)
+        self._wp = padded(self.wds)[:, None]
+        self._Cp = padded(self.C)
+        self._wCp = padded(self.wC)
+        self._e0p = np.zeros((n_el * width, 6))
+        self._e0p = self._strains(system.q0_raw)[1]  # reference strains: zero force there
+        self.e0 = self._e0p[self._slot]
         self.grad_idx = self.idx.ravel()
         self.stiff_rows = np.repeat(self.idx, 48, axis=1).ravel()
         self.stiff_cols = np.tile(self.idx, (1, 48)).ravel()
 
+    def _element_vectors(self, q: Array) -> Array:
+        """The nodal 3-vectors Q (E, 16, 3) of every element."""
+        return q[self.idx].reshape(-1, 16, 3)
+
     def _strains(self, q: Array) -> tuple[Array, Array]:
-        """Element vectors Q (G, 16, 3) at the quadrature points and strains e − e0 (G, 6)."""
-        qv = q[self.idx[self.el]].reshape(-1, 16, 3)
-        gram = qv @ np.swapaxes(qv, 1, 2)
-        e = 0.5 * np.einsum("gkab,gab->gk", self.h, gram)
-        return qv, e - self.e0
+        """Element vectors Q (E, 16, 3) and strains e − e0 in the padded point slots
+        (E · width, 6)."""
+        qe = self._element_vectors(q)
+        gram = (qe @ np.swapaxes(qe, 1, 2)).reshape(-1, 256, 1)
+        e = 0.5 * (self._hp @ gram).reshape(-1, 6)
+        return qe, e - self._e0p
 
-    def _per_element(self, vals: Array) -> Array:
-        return np.add.reduceat(vals, self._starts, axis=0)
+    def _stress(self, e: Array) -> Array:
+        """Stress resultants C (e − e0) in the padded slots."""
+        return (self._Cp @ e[:, :, None])[:, :, 0]
 
-    def _force(self, qv: Array, stress: Array) -> Array:
+    def _stress_matrices(self, stress: Array) -> Array:
+        """Σ over each element's points of Σ_k w S_k h_k: (E, 16, 16)."""
+        ws = (stress * self._wp).reshape(len(self._hp), 1, -1)
+        return (ws @ self._hp).reshape(-1, 16, 16)
+
+    def _force(self, qe: Array, stress: Array) -> Array:
         """∫ Bᵀ S ds per element, flattened on ``grad_idx``: B_k = h_k Q."""
-        hs = np.einsum("gk,gkab->gab", stress * self.wds[:, None], self.h)
-        return self._per_element((hs @ qv).reshape(-1, 48)).ravel()
+        return (self._stress_matrices(stress) @ qe).ravel()
 
     def potential(self, q):
         _, e = self._strains(q)
-        return 0.5 * float(np.einsum("gk,gkl,gl->", e, self.wC, e))
+        return 0.5 * float(np.einsum("gk,gk->", e, (self._wCp @ e[:, :, None])[:, :, 0]))
 
     def gradient(self, q):
-        qv, e = self._strains(q)
-        return self._force(qv, np.einsum("gkl,gl->gk", self.C, e))
+        qe, e = self._strains(q)
+        return self._force(qe, self._stress(e))
 
     def discrete_gradient(self, qi, qf):
         # e is quadratic in q: e_f − e_i = B(q_m)(q_f − q_i) exactly, so the midpoint B
         # with the mean stress is the exact discrete gradient of ½ eᵀCe.
         _, ei = self._strains(qi)
         _, ef = self._strains(qf)
-        qm, _ = self._strains(0.5 * (qi + qf))
-        return self._force(qm, np.einsum("gkl,gl->gk", self.C, 0.5 * (ei + ef)))
+        qm = self._element_vectors(0.5 * (qi + qf))
+        return self._force(qm, self._stress(0.5 * (ei + ef)))
 
     def stiffness(self, q):
-        qv, e = self._strains(q)
-        stress = np.einsum("gkl,gl->gk", self.C, e)
-        b = np.einsum("gkab,gbc->gkac", self.h, qv).reshape(-1, 6, 48)
-        k = np.einsum("gki,gkl,glj->gij", b, self.wC, b)
-        hs = np.einsum("gk,gkab->gab", stress * self.wds[:, None], self.h)
-        k += np.einsum("gab,cd->gacbd", hs, np.eye(3)).reshape(-1, 48, 48)
-        return self._per_element(k).ravel()
+        qe, e = self._strains(q)
+        n_el = len(qe)
+        # B = h Q in the padded slots, (E · width, 6, 48): material part Σ_g Bᵀ wC B
+        b = (self._hp.reshape(n_el, -1, 16, 16) @ qe[:, None]).reshape(-1, 6, 48)
+        cb = self._wCp @ b
+        k = np.swapaxes(b.reshape(n_el, -1, 48), 1, 2) @ cb.reshape(n_el, -1, 48)
+        hs = self._stress_matrices(self._stress(e))  # geometric part: hs ⊗ I3
+        kv = k.reshape(n_el, 16, 3, 16, 3)
+        for c in range(3):
+            kv[:, :, c, :, c] += hs
+        return k.ravel()
 
     def row_owner(self, row, holonomic=True):
         return self.name
