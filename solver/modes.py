@@ -24,28 +24,38 @@ Nonholonomic rows A_n(q) q̇ = 0 perturb to A_n (δξ̇ + Ω̂δξ) + ∂(A_n v*
 with their own multipliers.
 
 **Eigen-analysis.** The holonomic rows are eliminated with a basis Z of the null space of G0,
-δξ = Z η. The reduced matrices Zᵀ M Z etc. may be singular (the massless director d1 of a
-beam, bodies of zero inertia whose rotation follows from joints), so the problem is solved as a
-generalized eigenproblem, which puts the missing inertia at infinite eigenvalues, dropped.
-Undamped, non-gyroscopic symmetric problems are solved as K φ = ω² M φ (symmetric-definite if
-Zᵀ M Z is positive definite); all others in first-order (descriptor) form with the QZ
-algorithm. Directions that appear in no equation at all (massless *and* unrestrained) are
-removed first and counted. Eigenvalues s are reported once per complex-conjugate pair
-(Im s > 0) and once per real root; |s| below ``zero_tol`` times the reference frequency
-√(‖K‖/‖M‖) are rigid-body (neutral) modes, reported as 0 Hz once per independent shape.
-Mode shapes are returned in the full coordinates δξ (rotating frame), so a mode can be
-classified by which unknowns move (:meth:`Modes.fractions`).
+δξ = Z η (QR of G0ᵀ). The reduced matrices Zᵀ M Z etc. may be singular (the massless director
+d1 of a beam, bodies of zero inertia whose rotation follows from joints, massless nodes), and
+stiffness and inertia may be strongly graded (a beam's EA against its EI), so the eigenvalues
+are computed through the spectral transformation θ = 1/(s − s0) with a small negative shift
+s0: the low modes become the largest θ and keep full relative accuracy, missing inertia maps to
+θ = 0 (dropped as infinite), and no inverse of the mass matrix is formed. Undamped,
+non-gyroscopic symmetric problems use the symmetric form (Cholesky of K + δ² M, ``eigh``);
+all others the first-order descriptor pencil (η, η̇, ν), densely, or by shift-invert Arnoldi
+when only a few modes of a large model are asked for. Rigid-body modes at the shift would
+dominate the transformed problem, so the shift is moved next to the lowest moving mode in a
+second pass. A pencil that is singular at every shift has directions that appear in no
+equation (massless *and* unrestrained): they are removed and counted first, then QZ.
+Eigenvalues s are reported once per complex-conjugate pair (Im s > 0) and once per real root;
+|s| below ``zero_tol`` times the reference frequency √(‖ZᵀKZ‖/‖ZᵀMZ‖) are rigid-body
+(neutral) modes, reported as 0 Hz once per independent shape. Mode shapes are returned in the
+full coordinates δξ (rotating frame), so a mode can be classified by which unknowns move
+(:meth:`Modes.fractions`); within a cluster of equal eigenvalues (flap and lag of a round beam
+at rest) the basis is aligned with the coordinates, so it is reproducible.
 
-Models are assumed small (dense matrices, up to a few thousand unknowns).
+Models are assumed small (dense matrices, up to a few thousand unknowns: a spinning cantilever
+of 2184 unknowns takes about 8 s for all its 1080 modes, 3 s for the lowest ten, on 2 cores).
 """
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
+import scipy.sparse.linalg as spla
 from numpy.typing import ArrayLike, NDArray
 
 from solver.bodies import PrescribedBody
@@ -53,8 +63,12 @@ from solver.equilibrium import Equilibrium, Spin, SpinField, equilibrium
 from solver.system import System
 
 Array = NDArray[np.float64]
-INFINITE_TOL = 1e-11  # |β| of a normalized pencil below which an eigenvalue is infinite
+SHIFT = 1e-3  # |σ0|: shift of the spectral transformation (units of the reference frequency)
+INFINITE_TOL = 1e-13  # |θ| (relative to the largest) below which an eigenvalue is infinite
+SINGULAR_TOL = 1e-15  # reciprocal condition of a shifted pencil taken as singular
 UNDETERMINED_TOL = 1e-12  # relative singular value of a direction that enters no equation
+DEGENERATE_TOL = 1e-7  # relative spread of eigenvalues taken as one (degenerate) cluster
+ARNOLDI_MIN = 600  # companion size from which a few lowest modes are found by Arnoldi
 
 
 @dataclass
@@ -144,11 +158,11 @@ def linearize(system: System, q: ArrayLike, lam: ArrayLike, t: float = 0.0,
         d = -s.kkt({"Dv": jv})[:n, :n].toarray()
     else:
         k0, d = _finite_difference(s, q, v, lam, t, g, fd_step)
-    mass = s.M.toarray()
-    w = fld.W.toarray()
+    mw = s.M @ fld.W  # sparse products: M and Ω̂ are block diagonal
     gm = sp.csr_matrix((g, (s.G_rows, s.G_cols)), shape=(s.mh, n)).toarray()
-    c = d + s.A1.toarray() + 2.0 * mass @ w
-    k = k0 + mass @ w @ w + d @ w
+    c = d + s.A1.toarray() + 2.0 * mw.toarray()
+    k = k0 + (mw @ fld.W).toarray() + (fld.W.T @ d.T).T
+    w = fld.W.toarray() if s.mn else None
     if s.mn:
         a_vals = s.nonholonomic_values(q)
         rows, cols = s.A_rows - s.mh, s.A_cols
@@ -158,7 +172,7 @@ def linearize(system: System, q: ArrayLike, lam: ArrayLike, t: float = 0.0,
         b_n = a_n @ w + da
     else:
         a_n = b_n = np.zeros((0, n))
-    return Linearization(M=mass, C=c, K=k, G=gm, Z=_null_space(gm, n), A_n=a_n, B_n=b_n,
+    return Linearization(M=s.M.toarray(), C=c, K=k, G=gm, Z=_null_space(gm, n), A_n=a_n, B_n=b_n,
                          q=q.copy(), lam=lam.copy(), t=float(t), spin=spin, system=s)
 
 
@@ -171,7 +185,19 @@ def _null_space(g: Array, n: int) -> Array:
     gs = g[nrm > 0] / nrm[nrm > 0, None]
     if gs.shape[0] == 0:
         return np.eye(n)
-    return sla.null_space(gs, rcond=1e-10)
+    # QR of Gᵀ (cheaper than the SVD); the constraints of a model that integrates are
+    # independent, so plain QR suffices unless R shows a (near) dependent row, then the
+    # rank-revealing pivoted QR decides
+    m = gs.shape[0]
+    if m <= n:
+        q, r = sla.qr(gs.T, mode="full", check_finite=False)
+        d = np.abs(np.diag(r))
+        if d.min(initial=np.inf) > 1e-8 * d.max(initial=0.0):
+            return np.ascontiguousarray(q[:, m:])
+    q, r, _ = sla.qr(gs.T, mode="full", pivoting=True, check_finite=False)
+    d = np.abs(np.diag(r))
+    rank = int(np.count_nonzero(d > 1e-10 * d.max(initial=0.0)))
+    return np.ascontiguousarray(q[:, rank:])
 
 
 def _finite_difference(s: System, q: Array, v: Array, lam: Array, t: float, g: Array,
@@ -210,9 +236,12 @@ class Modes:
         −Re s / |s| (0 for rigid-body modes; negative: unstable).
     shapes
         Mode shapes δξ in the full coordinates (n × number of modes, complex), largest
-        component 1.
+        component 1. Within a cluster of equal eigenvalues the basis is made reproducible
+        and aligned with the coordinates (see ``_canonical``).
     n_infinite
-        Eigenvalues dropped as infinite (missing inertia).
+        Eigenvalues dropped as infinite (missing inertia: massless directions, and in the
+        first-order form one more per constraint-like row); ``None`` when only the lowest
+        ``n`` modes were computed.
     n_undetermined
         Directions removed because no equation involves them (massless and unrestrained).
     linearization, equilibrium
@@ -225,7 +254,7 @@ class Modes:
     damped_frequency: Array
     damping_ratio: Array
     shapes: NDArray[np.complex128]
-    n_infinite: int
+    n_infinite: int | None
     n_undetermined: int
     linearization: Linearization = field(repr=False)
     equilibrium: Equilibrium | None = field(default=None, repr=False)
@@ -266,7 +295,8 @@ def modes(lin: Linearization, n: int | None = None, *, zero_tol: float = 1e-6) -
     lin
         From :func:`linearize`.
     n
-        Return only the ``n`` lowest modes (all by default).
+        Return only the ``n`` lowest modes (all by default; for large models a given ``n``
+        is much cheaper: a partial symmetric eigensolver or shift-invert Arnoldi).
     zero_tol
         |s| below ``zero_tol`` times the reference frequency √(‖ZᵀKZ‖/‖ZᵀMZ‖) is a rigid-body
         mode (0 Hz).
@@ -275,11 +305,13 @@ def modes(lin: Linearization, n: int | None = None, *, zero_tol: float = 1e-6) -
     -------
     Modes
     """
+    if n is not None and n < 1:
+        raise ValueError(f"n = {n!r} must be ≥ 1 (or None for all modes)")
     z = lin.Z
     nfull = lin.M.shape[0]
     if z.shape[1] == 0:
         return _empty(lin, nfull)
-    mt, ct, kt = z.T @ lin.M @ z, z.T @ lin.C @ z, z.T @ lin.K @ z
+    mt, ct, kt = (_sandwich(z, x) for x in (lin.M, lin.C, lin.K))
     at, bt = lin.A_n @ z, lin.B_n @ z
     nm, nc, nk = (float(np.abs(x).max(initial=0.0)) for x in (mt, ct, kt))
     # reference circular frequency: time is scaled by it so the pencil is O(1)
@@ -296,25 +328,32 @@ def modes(lin: Linearization, n: int | None = None, *, zero_tol: float = 1e-6) -
     nhs = max(float(np.abs(bt).max(initial=0.0)), w_ref * float(np.abs(at).max(initial=0.0)))
     nhs = nhs or 1.0
     ah, bh = at * (w_ref / nhs), bt / nhs
-    # directions no equation involves (massless and unrestrained) are removed
-    basis, rows, n_undet = _determined(mh, ch, kh, ah, bh)
-    aht = ah.T  # the nonholonomic forces in the η-equations
-    if basis is not None:
-        mh, ch, kh = (rows.T @ x @ basis for x in (mh, ch, kh))
-        aht = rows.T @ aht
-        ah, bh = ah @ basis, bh @ basis
-        z = z @ basis
-    k = z.shape[1]
-    scale_c = float(np.abs(ch).max(initial=0.0))
-    symmetric = (np.allclose(mh, mh.T, rtol=0, atol=1e-12)
-                 and np.allclose(kh, kh.T, rtol=0, atol=1e-12))
-    if scale_c <= 1e-13 and not len(ah) and symmetric:
-        sig, vec, n_inf = _undamped(mh, kh)
-    else:
-        sig, vec, n_inf = _first_order(mh, ch, kh, ah, aht, bh, k)
+    solved = _shift_invert(mh, ch, kh, ah, ah.T, bh, n, zero_tol)
+    n_undet = 0
+    if solved is None:
+        # the pencil is singular: remove the directions no equation involves (massless and
+        # unrestrained), then QZ
+        basis, rows, n_undet = _determined(mh, ch, kh, ah, bh)
+        aht = ah.T  # the nonholonomic forces in the η-equations
+        if basis is not None:
+            mh, ch, kh = (rows.T @ x @ basis for x in (mh, ch, kh))
+            aht = rows.T @ aht
+            ah, bh = ah @ basis, bh @ basis
+            z = z @ basis
+        solved = _shift_invert(mh, ch, kh, ah, aht, bh, n, zero_tol)
+        if solved is None:
+            solved = _qz(*_descriptor(mh, ch, kh, ah, aht, bh), z.shape[1])
+    sig, vec, n_inf = solved
     s_all = sig * w_ref
     shapes = z @ vec
     return _assemble(lin, s_all, shapes, n_inf, n_undet, zero_tol * w_ref, n)
+
+
+def _sandwich(z: Array, x: Array) -> Array:
+    """Zᵀ X Z, through a sparse X when X is mostly zeros (mass and gyroscopic matrices)."""
+    if np.count_nonzero(x) < 0.05 * x.size:
+        return z.T @ np.asarray(sp.csr_matrix(x) @ z)
+    return z.T @ x @ z
 
 
 def _determined(mh, ch, kh, ah, bh):
@@ -323,8 +362,8 @@ def _determined(mh, ch, kh, ah, bh):
     k = mh.shape[0]
     cols = np.vstack([mh, ch, kh, ah, bh])
     rows = np.hstack([mh, ch, kh, ah.T])
-    _, sc, vt = np.linalg.svd(cols, full_matrices=True)
-    u, sr, _ = np.linalg.svd(rows, full_matrices=True)
+    _, sc, vt = sla.svd(cols, full_matrices=False)
+    u, sr, _ = sla.svd(rows, full_matrices=False)
     rc = int(np.count_nonzero(sc > UNDETERMINED_TOL * max(sc.max(initial=0.0), 1e-300)))
     rr = int(np.count_nonzero(sr > UNDETERMINED_TOL * max(sr.max(initial=0.0), 1e-300)))
     if rc == k and rr == k:
@@ -335,37 +374,132 @@ def _determined(mh, ch, kh, ah, bh):
     return vt[:rc].T, u[:, :rr], k - rc
 
 
-def _undamped(mh: Array, kh: Array) -> tuple[NDArray[np.complex128], NDArray, int]:
-    """K φ = σ² M φ (symmetric): s = i σ per mode. Returns (s, shapes in η, dropped)."""
+def _shift_invert(mh, ch, kh, ah, aht, bh, n, zero):
+    """Eigenvalues by the spectral transformation θ = 1/(σ − σ0) with a small shift σ0 < 0
+    (normalized units): the low modes become the largest θ and keep full relative accuracy
+    even when stiffness or inertia are strongly graded (a beam's EA against its EI, tiny
+    rotary inertia) — unlike an inverse of the mass matrix; missing inertia maps to θ = 0
+    (dropped as infinite). Undamped symmetric problems use K + δ² M = L Lᵀ and ``eigh`` of
+    L⁻¹ M L⁻ᵀ; all others the descriptor pencil. Returns (σ, shapes in η, number dropped as
+    infinite, or None when only some modes were computed) or ``None`` if the pencil is
+    singular at the shifts."""
+    k = mh.shape[0]
+    symmetric = (not len(ah) and np.abs(ch).max(initial=0.0) <= 1e-13
+                 and np.abs(kh - kh.T).max(initial=0.0) <= 1e-11
+                 and np.abs(mh - mh.T).max(initial=0.0) <= 1e-11)
+    ab = None if symmetric else _descriptor(mh, ch, kh, ah, aht, bh)
+
+    def solve(shift: float):
+        if symmetric:
+            out = _symmetric(0.5 * (mh + mh.T), 0.5 * (kh + kh.T), shift, n)
+            if out is not None:
+                return out
+        pencil = ab if ab is not None else _descriptor(mh, ch, kh, ah, aht, bh)
+        for sigma0 in (-shift, -shift * 1.6180339887):
+            out = _general(*pencil, sigma0, k, n)
+            if out is not None:
+                return out
+        return None
+
+    out = solve(SHIFT)
+    if out is None:
+        return None
+    # rigid-body modes (σ = 0) at distance δ from the shift dominate the transformed problem,
+    # costing the other modes a relative accuracy of about ε/δ²: shift again, to half the
+    # lowest nonzero |σ|, when it is far above δ
+    mag = np.abs(out[0])
+    moving = mag[mag > zero]
+    if np.any(mag <= zero) and len(moving) and moving.min() > 10 * SHIFT:
+        again = solve(0.5 * float(moving.min()))
+        if again is not None:
+            out = again
+    return out
+
+
+def _symmetric(mh: Array, kh: Array, shift: float, n: int | None):
+    """Undamped symmetric K φ = σ² M φ with K + δ² M positive definite (δ = ``shift``)."""
+    d2 = shift**2
     try:
-        cho = np.linalg.cholesky(mh)
-        ok = np.diag(cho).min() > 1e-7 * np.diag(cho).max()
+        low = np.linalg.cholesky(kh + d2 * mh)
     except np.linalg.LinAlgError:
-        ok = False
-    if ok:
-        mu, vec = sla.eigh(kh, mh)
-        n_inf = 0
+        return None  # unstable (K indefinite) or massless and unrestrained: general path
+    piv = np.diag(low) ** 2
+    if piv.min() <= SINGULAR_TOL * piv.max():
+        return None
+    x = sla.solve_triangular(low, mh, lower=True, check_finite=False)
+    smat = sla.solve_triangular(low, x.T, lower=True, check_finite=False)  # L⁻¹ M L⁻ᵀ
+    smat = 0.5 * (smat + smat.T)
+    k = mh.shape[0]
+    partial = n is not None and n < k
+    if partial:  # the largest θ are the lowest modes
+        theta, u = sla.eigh(smat, subset_by_index=[k - n, k - 1], check_finite=False)
     else:
-        ab, vec = sla.eig(kh, mh, homogeneous_eigvals=True)
-        alpha, beta = ab
-        finite = np.abs(beta) > INFINITE_TOL * np.maximum(np.abs(alpha), 1e-300)
-        finite &= np.maximum(np.abs(alpha), np.abs(beta)) > INFINITE_TOL
-        n_inf = int(np.count_nonzero(~finite))
-        mu = np.real_if_close(alpha[finite] / beta[finite], tol=1e6)
-        vec = vec[:, finite]
-    mu = np.asarray(mu)
-    s = np.where(np.isreal(mu) & (np.real(mu) < 0), np.sqrt(np.abs(mu)) + 0j,
-                 1j * np.sqrt(mu.astype(complex)))
-    return s, vec, n_inf
+        theta, u = np.linalg.eigh(smat)
+    finite = theta > INFINITE_TOL * max(float(np.abs(theta).max(initial=0.0)), 1e-300)
+    n_inf = None if partial else int(np.count_nonzero(~finite))
+    mu = 1.0 / theta[finite] - d2  # σ²
+    phi = sla.solve_triangular(low.T, u[:, finite], lower=False, check_finite=False)
+    sig = np.where(mu < 0, np.sqrt(np.abs(mu)) + 0j, 1j * np.sqrt(np.abs(mu)))
+    return sig, phi, n_inf
 
 
-def _first_order(mh, ch, kh, ah, aht, bh, k):
-    """Descriptor form y = (η, u = η', ν): σ B y = A y. Returns (σ, shapes in η, dropped)."""
-    mn = ah.shape[0]
+def _descriptor(mh, ch, kh, ah, aht, bh) -> tuple[Array, Array]:
+    """First-order descriptor pencil σ B y = A y for y = (η, u = η', ν)."""
+    k, mn = mh.shape[0], ah.shape[0]
     eye, zk = np.eye(k), np.zeros((k, k))
     zn, znn = np.zeros((k, mn)), np.zeros((mn, mn))
     a = np.block([[zk, eye, zn], [-kh, -ch, -aht], [-bh, -ah, znn]])
     b = np.block([[eye, zk, zn], [zk, mh, zn], [zn.T, zn.T, znn]])
+    return a, b
+
+
+def _general(a: Array, b: Array, sigma0: float, k: int, n: int | None):
+    """Shift-invert of the descriptor pencil: eigenvalues θ of (A − σ0 B)⁻¹ B, densely or,
+    for a few modes of a large model, by Arnoldi (ARPACK)."""
+    size = a.shape[0]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", sla.LinAlgWarning)
+        try:
+            shifted = a - sigma0 * b
+            lu = sla.lu_factor(shifted, check_finite=False)
+        except (sla.LinAlgWarning, ValueError, sla.LinAlgError):
+            return None
+    rcond, info = _gecon(lu[0], float(np.abs(shifted).sum(axis=0).max()))
+    if info or not rcond > SINGULAR_TOL:
+        return None
+    if n is not None and size > ARNOLDI_MIN:
+        op = spla.LinearOperator((size, size), dtype=float,
+                                 matvec=lambda x: sla.lu_solve(lu, b @ x, check_finite=False))
+        nev = min(2 * n + 8, size - 2)
+        try:
+            theta, y = spla.eigs(op, k=nev, which="LM", tol=1e-13)
+        except (spla.ArpackError, spla.ArpackNoConvergence):
+            theta = None
+        if theta is not None:
+            big = np.abs(theta) > INFINITE_TOL * np.abs(theta).max()
+            sig = sigma0 + 1.0 / theta[big]
+            reach = 1.0 / np.abs(theta).min()  # every σ not found is at least this far
+            mag = np.sort(np.abs(sig))
+            if len(mag) and mag[min(2 * n, len(mag)) - 1] + abs(sigma0) < reach:
+                return sig, y[:k, big], None
+    theta, y = np.linalg.eig(sla.lu_solve(lu, b, check_finite=False))
+    finite = np.abs(theta) > INFINITE_TOL * max(float(np.abs(theta).max(initial=0.0)), 1e-300)
+    sig = sigma0 + 1.0 / theta[finite]
+    if np.abs(sig - sigma0).min(initial=np.inf) < 1e-6 * abs(sigma0):
+        return None  # the shift sits on an eigenvalue: try another
+    return sig, y[:k, finite], int(np.count_nonzero(~finite))
+
+
+def _gecon(lu_matrix: Array, anorm: float) -> tuple[float, int]:
+    """Reciprocal condition number (1-norm) of a matrix from its LU factors (LAPACK gecon)."""
+    gecon = sla.get_lapack_funcs("gecon", (lu_matrix,))
+    rcond, info = gecon(lu_matrix, anorm, norm="1")
+    return float(rcond), int(info)
+
+
+def _qz(a: Array, b: Array, k: int):
+    """The descriptor pencil by QZ (last resort, for singular pencils). Returns (σ, shapes in
+    η, number dropped)."""
     ab, vec = sla.eig(a, b, homogeneous_eigvals=True)
     alpha, beta = ab
     big = np.maximum(np.abs(alpha), np.abs(beta))
@@ -375,7 +509,7 @@ def _first_order(mh, ch, kh, ah, aht, bh, k):
     return sig, vec[:k, finite], int(np.count_nonzero(~finite))
 
 
-def _assemble(lin: Linearization, s_all, shapes, n_inf: int, n_undet: int, zero: float,
+def _assemble(lin: Linearization, s_all, shapes, n_inf: int | None, n_undet: int, zero: float,
               n: int | None) -> Modes:
     """One entry per complex pair or real root, rigid-body modes merged by shape, sorted."""
     s_all = np.asarray(s_all, dtype=complex)
@@ -398,6 +532,7 @@ def _assemble(lin: Linearization, s_all, shapes, n_inf: int, n_undet: int, zero:
                      s_out.real + 0j, s_out)
     order = np.lexsort((np.abs(s_out.imag), np.abs(s_out)))
     s_out, shapes = s_out[order], shapes[:, order]
+    shapes = _canonical(s_out, shapes, zero)
     if n is not None:
         s_out, shapes = s_out[:n], shapes[:, :n]
     shapes = _normalized(shapes)
@@ -406,6 +541,41 @@ def _assemble(lin: Linearization, s_all, shapes, n_inf: int, n_undet: int, zero:
     return Modes(eigenvalues=s_out, frequency=mag / (2 * np.pi),
                  damped_frequency=np.abs(s_out.imag) / (2 * np.pi), damping_ratio=zeta,
                  shapes=shapes, n_infinite=n_inf, n_undetermined=n_undet, linearization=lin)
+
+
+def _canonical(s: NDArray[np.complex128], shapes: NDArray, zero: float) -> NDArray:
+    """A reproducible basis for each cluster of (numerically) equal eigenvalues — flap and lag
+    of a round beam at rest, the x, y, z of an isotropic spring, rigid-body modes — whose
+    eigenvectors are otherwise an arbitrary mix: the c coordinates that move most (QR with
+    column pivoting) each get one vector that is 1 there and 0 at the others, so the shapes
+    align with the coordinates whenever the modes can be told apart by them."""
+    out = np.array(shapes, dtype=complex)
+    i = 0
+    while i < len(s):
+        j = i + 1
+        tol = DEGENERATE_TOL * max(abs(s[i]), zero)
+        while j < len(s) and abs(s[j] - s[i]) <= tol:
+            j += 1
+        if j - i > 1:
+            phi = out[:, i:j]
+            sub = phi[_pivot_rows(phi), :]
+            if np.linalg.cond(sub) < 1e8:
+                out[:, i:j] = phi @ np.linalg.inv(sub)
+        i = j
+    return out
+
+
+def _pivot_rows(phi: NDArray) -> list[int]:
+    """The rows (coordinates) QR with column pivoting of φᵀ would pick: greedily the row of
+    largest norm, then the largest after removing its direction."""
+    a = np.array(phi, dtype=complex)
+    rows = []
+    for _ in range(phi.shape[1]):
+        i = int(np.argmax(np.einsum("ij,ij->i", a, a.conj()).real))
+        rows.append(i)
+        v = a[i] / max(np.linalg.norm(a[i]), 1e-300)
+        a -= np.outer(a @ v.conj(), v)
+    return rows
 
 
 def _normalized(shapes: NDArray) -> NDArray[np.complex128]:

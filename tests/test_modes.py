@@ -193,7 +193,7 @@ def test_pendulum_under_gravity(theta0):
     md = natural_frequencies(model)
     assert len(md) == 1 and md.equilibrium.converged
     w = np.sqrt(mass * G * arm / (iyy + mass * arm * arm))
-    # measured 0 from the bottom, 2.3e-13 from 0.7 rad (λ after 5 iterations)
+    # measured 0 from the bottom, ≤ 2.3e-13 from 0.7 rad (5–6 Newton iterations)
     assert _omega(md)[0] == pytest.approx(w, rel=1e-11)
     q = md.equilibrium.q
     o = md.equilibrium.system.offset[rod]
@@ -468,3 +468,66 @@ def test_system_reused():
     model, _ = _pendulum()
     s = System(model)
     assert natural_frequencies(s).linearization.system is s
+
+
+# ---------------------------------------------------------------------------- solver paths
+def test_massless_node_is_condensed():
+    """Two springs in series through a massless point: ω² = k1 k2 / ((k1 + k2) m); the
+    massless coordinates are infinite eigenvalues, dropped."""
+    k1, k2, m = 300.0, 100.0, 2.0
+    model = Model()
+    p, b = model.add(PointMass("massless", 0.0)), model.add(PointMass("mass", m))
+    model.add(Spring("k1", None, p, stiffness=k1), Spring("k2", p, b, stiffness=k2))
+    md = natural_frequencies(model)
+    np.testing.assert_allclose(_omega(md), np.sqrt(k1 * k2 / ((k1 + k2) * m)), rtol=1e-12)
+    # measured 0
+    assert len(md) == 3 and md.n_infinite == 3
+
+
+def test_maxwell_element():
+    """Mass on a spring in series with a dashpot to ground (massless node between them):
+    s (m c s² + m k s + c k) = 0 — the free drift of the dashpot is a 0 Hz mode, the rest a
+    damped pair (first-order behaviour of a massless damped coordinate)."""
+    k, c, m = 100.0, 20.0, 1.0
+    model = Model()
+    p, b = model.add(PointMass("node", 0.0)), model.add(PointMass("mass", m))
+    model.add(Spring("dashpot", None, p, damping=c), Spring("spring", p, b, stiffness=k))
+    md = natural_frequencies(model)
+    roots = np.roots([m * c, m * k, c * k])
+    pair = roots[roots.imag > 0][0]
+    assert len(md) == 6
+    np.testing.assert_array_equal(md.frequency[:3], 0.0)
+    np.testing.assert_allclose(md.eigenvalues[3:], pair, rtol=1e-12)  # measured 9e-16
+
+
+def test_lowest_modes_of_a_large_model():
+    """Fixed–free chain of N = 110 equal masses, springs k, a dashpot c to ground on each:
+    ω_j = 2√(k/m) sin((2j − 1)π / (2(2N + 1))), s = −c/2m ± i√(ω² − (c/2m)²). Asking for a
+    few modes uses shift-invert Arnoldi (first-order form of 660 unknowns)."""
+    n_masses, m, k, c = 110, 1.0, 1.0e4, 0.5
+    model = Model()
+    prev = None
+    for i in range(n_masses):
+        p = model.add(PointMass(f"p{i}", m))
+        model.add(Spring(f"k{i}", prev, p, stiffness=k), Spring(f"c{i}", None, p, damping=c))
+        prev = p
+    md = natural_frequencies(model, n=6)
+    j = np.arange(1, 3)
+    w = 2 * np.sqrt(k / m) * np.sin((2 * j - 1) * np.pi / (2 * (2 * n_masses + 1)))
+    s = -c / (2 * m) + 1j * np.sqrt(w**2 - (c / (2 * m)) ** 2)
+    assert len(md) == 6 and md.n_infinite is None
+    np.testing.assert_allclose(md.eigenvalues, np.repeat(s, 3), rtol=1e-11)  # measured 9e-14
+
+
+def test_massless_unrestrained_directions_are_removed():
+    """A massless point that nothing holds enters no equation: the equilibrium takes the
+    minimum-norm step (none), the modes drop its three directions and keep the oscillator."""
+    k, m = 100.0, 4.0
+    model = Model()
+    model.add(PointMass("loose", 0.0))
+    b = model.add(PointMass("mass", m))
+    model.add(Spring("k", None, b, stiffness=k))
+    md = natural_frequencies(model)
+    assert md.equilibrium.iterations == 0
+    assert md.n_undetermined == 3 and len(md) == 3
+    np.testing.assert_allclose(_omega(md), np.sqrt(k / m), rtol=1e-12)  # measured 0
