@@ -409,7 +409,7 @@ def test_spin_input_is_checked():
 
 
 @pytest.mark.parametrize("spin", [Spin(11.0), Spin(10.0, axis=(0.0, 0.1, 1.0)),
-                                  Spin(10.0, origin=(0.1, 0.0, 0.0))])
+                                  Spin(10.0, origin=(0.1, 0.0, 0.0)), Spin(0.0)])
 def test_spin_inconsistent_with_hub_names_it(spin):
     model, _, _ = _slider(10.0)
     with pytest.raises(ValueError, match="'hub' does not move with the spin"):
