@@ -16,29 +16,19 @@ import pytest
 from scipy.special import ellipk
 
 from solver.bodies import PointMass, RigidBody, ground
-from solver.curve_joints import ArcLength, CurveSliding, Rolling
+from solver.curve_joints import ArcLength, CurveSliding
 from solver.curves import circle, cycloid, line
-from solver.forces import Gravity
-from solver.joints import Revolute
 from solver.model import Model
 from solver.simulation import simulate
 from solver.system import System
 from studies.measure import period_from_crossings
+from tests.models import G, rodrigues, rolling_disc
 
-G = 9.81
 SEED = 20240917
 Z = np.array([0.0, 0.0, 1.0])
 
 
 # ---------------------------------------------------------------------------- helpers
-def _rot(axis, angle):
-    """Rodrigues (independent of solver.rotations)."""
-    n = np.asarray(axis, dtype=float)
-    n = n / np.linalg.norm(n)
-    k = np.array([[0.0, -n[2], n[1]], [n[2], 0.0, -n[0]], [-n[1], n[0], 0.0]])
-    return np.eye(3) + np.sin(angle) * k + (1.0 - np.cos(angle)) * (k @ k)
-
-
 def _fd4(f, q, i, h):
     """Fourth-order central difference of f along coordinate i (error O(h⁴) + eps/h)."""
     e = np.zeros_like(q)
@@ -63,7 +53,7 @@ def _circle_case(rotation):
     pos = np.array([rad * np.sin(th), -rad * np.cos(th), 0.0])
     if rotation:
         body = RigidBody("collar", 2.0, inertia=(0.1, 0.1, 0.2), position=pos,
-                         orientation=_rot(Z, th))
+                         orientation=rodrigues(Z, th))
     else:
         body = PointMass("collar", 2.0, position=pos)
     j = CurveSliding("slide", g0, circle(rad, start_angle=0.5 * np.pi), body, rotation=rotation)
@@ -79,7 +69,7 @@ def _cycloid_case(rotation):
     pos = _cycloid_point(a, 2 * th)
     if rotation:
         body = RigidBody("collar", 2.0, inertia=(0.1, 0.1, 0.2), position=pos,
-                         orientation=_rot(Z, th))
+                         orientation=rodrigues(Z, th))
     else:
         body = PointMass("collar", 2.0, position=pos)
     j = CurveSliding("slide", g0, cycloid(a), body, rotation=rotation)
@@ -92,11 +82,11 @@ def _general_case(rotation):
     """The curve on a free, tilted rigid body k; the contact point offset from body ℓ's centre
     of mass (exercises the ∂/∂d^k and −b_α I blocks), rotation constraints as given."""
     a, t0 = 0.3, 0.7
-    rk = _rot((1.0, 2.0, 0.5), 0.6)
+    rk = rodrigues((1.0, 2.0, 0.5), 0.6)
     xk = np.array([0.2, -0.1, 0.4])
     body_k = RigidBody("carrier", 5.0, inertia=(1.0, 2.0, 2.5), position=xk, orientation=rk)
     contact = xk + rk @ _cycloid_point(a, t0)
-    rl = _rot((0.3, -1.0, 0.8), 1.1)
+    rl = rodrigues((0.3, -1.0, 0.8), 1.1)
     body_l = RigidBody("slider", 1.0, inertia=(0.1, 0.2, 0.25),
                        position=contact + rl @ np.array([0.05, -0.02, 0.03]), orientation=rl)
     j = CurveSliding("slide", body_k, cycloid(a), body_l, point=contact, rotation=rotation)
@@ -190,38 +180,13 @@ def test_discrete_jacobian_small_eta_step(case, deta):
 
 
 # ---------------------------------------------------------------------------- nonholonomic
-def _disc_model(theta0, R=1.0, r=0.25, m=3.0, gravity=True):
-    """A uniform disc (radius r) rolling inside a circular track (radius R) carried by ground.
-
-    A massless link slides on the track with the Frenet triad (t, n, b) locked to it; the disc
-    centre is at contact + r n (n = inward normal), revolute to the link about z; rolling
-    ṡ + r (ω_disc − ω_link)·z = 0 (side +1)."""
-    g0 = ground()
-    track = circle(R, start_angle=0.5 * np.pi)  # lowest point at η = 1/2
-    contact = R * np.array([np.sin(theta0), -np.cos(theta0), 0.0])
-    frame = _rot(Z, theta0)  # columns t, n, b at the contact
-    centre = contact + r * frame[:, 1]
-    link = RigidBody("link", 0.0, position=contact, orientation=frame)
-    ip = 0.5 * m * r * r
-    disc = RigidBody("disc", m, inertia=(0.5 * ip, 0.5 * ip, ip), position=centre,
-                     orientation=frame)
-    j = CurveSliding("slide", g0, track, link, rotation=True)
-    arc = ArcLength(j)
-    roll = Rolling("roll", arc, disc, link, r, side=1)
-    model = Model()
-    model.add(g0, link, disc, j, Revolute("rev", link, disc, point=centre, axis=Z), arc, roll)
-    if gravity:
-        model.add(Gravity((0.0, -G, 0.0)))
-    return model, j, arc, roll, link, disc
-
-
 @pytest.mark.parametrize("curve", ["circle", "cycloid"])
 def test_nonholonomic_derivative_matches_finite_differences(curve):
     """∂(A(q)·dq)/∂q from nonholonomic_derivative against FD of A(q)·dq (arc length + rolling;
     a cycloid-carrying variant for the arc length's |p'|' term)."""
     rng = np.random.default_rng(SEED + 3)
     if curve == "circle":
-        model, j, *_ = _disc_model(0.3)
+        model, j, *_ = rolling_disc(0.3)
         eta = 0.46
     else:
         model, j = _cycloid_case(True)
@@ -259,12 +224,12 @@ def test_arc_length_row_is_parametric_speed():
 def test_rolling_row_is_relative_spin_about_the_axis():
     """A(q)·q̇ of Rolling = ṡ + r (ω_pin − ω_link)·n, with ḋ_α = ω × d_α for arbitrary
     (non-planar) orientations and angular velocities (rigid-body kinematics)."""
-    model, _, arc, _, link, disc = _disc_model(0.3)
+    model, _, arc, _, link, disc = rolling_disc(0.3)
     s = System(model)
     rng = np.random.default_rng(SEED + 4)
     q = s.q0_raw.copy()
     v = np.zeros(s.n)
-    rl, rp = _rot(rng.standard_normal(3), 0.9), _rot(rng.standard_normal(3), 2.1)
+    rl, rp = rodrigues(rng.standard_normal(3), 0.9), rodrigues(rng.standard_normal(3), 2.1)
     wl, wp = rng.standard_normal(3), rng.standard_normal(3)
     for body, r, w in ((link, rl, wl), (disc, rp, wp)):
         o = s.offset[body]
@@ -296,7 +261,7 @@ def test_free_slider_on_straight_line_moves_uniformly(rigid):
     g0 = ground()
     if rigid:
         body = RigidBody("slider", 2.0, inertia=(0.1, 0.2, 0.3), position=x0,
-                         orientation=_rot((1.0, 1.0, 0.0), 0.4), velocity=speed * u)
+                         orientation=rodrigues((1.0, 1.0, 0.0), 0.4), velocity=speed * u)
     else:
         body = PointMass("slider", 2.0, position=x0, velocity=speed * u)
     j = CurveSliding("slide", g0, line(p0, p1), body, rotation=rigid)
@@ -354,7 +319,7 @@ def test_disc_rolling_inside_circular_track():
     t_lin = 2 * np.pi / w
     n_steps = 200
     h = t_exact / n_steps
-    model, *_ = _disc_model(th0, R, r, m)
+    model, *_ = rolling_disc(th0, R, r, m)
     sim = simulate(model, 2 * t_exact, h, reactions=False)
     assert sim.converged, sim.message
     ds = sim.dataset

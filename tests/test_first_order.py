@@ -2,8 +2,9 @@
 
 The element is a first-order lag τ ẋ + x = u(q) whose input is the horizontal position of a
 pendulum's centre of mass, u = X_c, and whose output pushes back on it with a horizontal force
-F = −k x at the centre of mass. It is declared here, outside ``solver/``, with one declaration
-class and one set class: what adding a first-order element to the library takes.
+F = −k x at the centre of mass. It is declared outside ``solver/`` (``tests/models.py``, shared
+with the modes tests), with one declaration class and one set class: what adding a first-order
+element to the library takes.
 
 Reference: the same system in minimal coordinates (angle θ from the downward vertical),
     I_O θ̈ = −m g (L/2) sin θ − k x (L/2) cos θ,   τ ẋ = (L/2) sin θ − x,
@@ -12,67 +13,23 @@ integrated by DOP853 at rtol 1e-12.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
 from solver.bodies import RigidBody, ground
-from solver.element import Element, ElementSet
 from solver.forces import Gravity
 from solver.joints import Revolute
 from solver.model import Model
 from solver.rotations import rotation_about
 from solver.simulation import simulate
-from solver.state import FIRST, StateBlock
+from tests.models import Lag
 
 M, L, G = 1.0, 1.0, 9.81
 J_CM = M * L * L / 12.0  # slender rod about its centre
 TAU, K = 0.2, 5.0  # s, N/m
 THETA0 = np.radians(30.0)
 T_END = 1.0
-
-
-@dataclass(eq=False)
-class Lag(Element):
-    """τ ẋ + x = X_c(q); force −k x along global x on ``body``'s centre of mass."""
-
-    name: str
-    body: RigidBody
-    tau: float
-    gain: float
-
-    def states(self) -> list[StateBlock]:
-        return [StateBlock(self, FIRST, 1, initial=0.0, mass=np.array([[self.tau]]), units="m",
-                           long_name="lagged horizontal position")]
-
-
-class LagSet(ElementSet):
-    """All lags at once: f_x = X_c − x on the state rows, −k x on the bodies' x rows."""
-
-    nonconservative = True
-
-    def __init__(self, elements, system) -> None:
-        super().__init__(elements, system)
-        self.ix = np.array([system.offset[e] for e in elements])
-        self.iq = np.array([system.offset[e.body] for e in elements])
-        self.k = np.array([e.gain for e in elements])
-        self.force_idx = np.concatenate([self.ix, self.iq])
-        self.fq_rows = np.concatenate([self.ix, self.ix, self.iq])
-        self.fq_cols = np.concatenate([self.iq, self.ix, self.ix])
-        j = len(elements)
-        self._dq = np.concatenate([np.ones(j), -np.ones(j), -self.k])
-
-    def force(self, q, v, t):
-        x = q[self.ix]
-        return np.concatenate([q[self.iq] - x, -self.k * x])
-
-    def force_jacobians(self, q, v, t):
-        return self._dq, np.zeros(0)
-
-
-Lag.set_class = LagSet
 
 
 def model() -> tuple[Model, RigidBody]:

@@ -17,28 +17,18 @@ import pytest
 from scipy.optimize import brentq
 
 from solver.bodies import PointMass, RigidBody, ground, spinning
-from solver.curve_joints import ArcLength, CurveSliding, Rolling
-from solver.curves import circle
-from solver.element import Element, ElementSet
+from solver.element import Element
 from solver.equilibrium import Spin, equilibrium
 from solver.forces import AppliedLoad, Gravity, Spring
 from solver.integrators import make_integrator
 from solver.joints import Prismatic, Revolute
 from solver.model import Model
 from solver.modes import linearize, modes, natural_frequencies
-from solver.state import FIRST, StateBlock
+from solver.state import StateBlock
 from solver.system import System
+from tests.models import G, Lag, rodrigues, rolling_disc
 
-G = 9.81
 TWO_PI = 2.0 * np.pi
-
-
-def _rot(axis, angle):
-    """Rodrigues (independent of solver.rotations)."""
-    n = np.asarray(axis, dtype=float)
-    n = n / np.linalg.norm(n)
-    k = np.array([[0.0, -n[2], n[1]], [n[2], 0.0, -n[0]], [-n[1], n[0], 0.0]])
-    return np.eye(3) + np.sin(angle) * k + (1.0 - np.cos(angle)) * (k @ k)
 
 
 def _omega(md):
@@ -108,44 +98,6 @@ def test_damped_oscillator():
 
 
 # ---------------------------------------------------------------------------- first-order
-@dataclass(eq=False)
-class Lag(Element):
-    """τ ẋ + x = u (u: x-coordinate of a point mass); force −g x along global x on it."""
-
-    name: str
-    body: PointMass
-    tau: float
-    gain: float
-
-    def states(self):
-        return [StateBlock(self, FIRST, 1, mass=np.array([[self.tau]]))]
-
-
-class LagSet(ElementSet):
-    nonconservative = True
-
-    def __init__(self, elements, system):
-        super().__init__(elements, system)
-        self.ix = np.array([system.offset[e] for e in elements])
-        self.iq = np.array([system.offset[e.body] for e in elements])
-        self.k = np.array([e.gain for e in elements])
-        self.force_idx = np.concatenate([self.ix, self.iq])
-        self.fq_rows = np.concatenate([self.ix, self.ix, self.iq])
-        self.fq_cols = np.concatenate([self.iq, self.ix, self.ix])
-        j = len(elements)
-        self._dq = np.concatenate([np.ones(j), -np.ones(j), -self.k])
-
-    def force(self, q, v, t):
-        x = q[self.ix]
-        return np.concatenate([q[self.iq] - x, -self.k * x])
-
-    def force_jacobians(self, q, v, t):
-        return self._dq, np.zeros(0)
-
-
-Lag.set_class = LagSet
-
-
 def test_first_order_state_in_the_modes():
     """A mass on a spring fed back through a lag: m ü = −k u − g x, τ ẋ = u − x. The
     eigenvalues are those of the 3 × 3 state matrix (one complex pair, one real root), plus
@@ -179,7 +131,7 @@ def _pendulum(theta0=0.0, mass=1.5, arm=0.4, inertia=(0.02, 0.05, 0.04)):
     g0 = model.add(ground())
     c = arm * np.array([np.sin(theta0), 0.0, -np.cos(theta0)])
     rod = model.add(RigidBody("rod", mass, inertia=inertia, position=c,
-                              orientation=_rot((0, 1, 0), -theta0)))
+                              orientation=rodrigues((0, 1, 0), -theta0)))
     model.add(Revolute("pin", g0, rod, point=(0, 0, 0), axis=(0, 1, 0)))
     model.add(Gravity((0.0, 0.0, -G)))
     return model, rod
@@ -267,7 +219,7 @@ def test_flap_droop_under_gravity():
     assert _omega(md)[0] == pytest.approx(np.sqrt(k / i1), rel=1e-11)  # measured 2e-16
 
 
-TILTED = _rot((1.0, -2.0, 0.5), 0.9)
+TILTED = rodrigues((1.0, -2.0, 0.5), 0.9)
 
 
 @pytest.mark.parametrize("omega", [10.0, 30.0])
@@ -309,21 +261,8 @@ def test_gyroscopic_splitting(omega):
 def test_rolling_disc_in_circular_track():
     """Disc rolling without slip inside a circular track (nonholonomic rolling and arc-length
     rows): ω² = 2g / (3(R − r)); the free arc length and disc angle are neutral (0 Hz)."""
-    big_r, r, m, theta0 = 1.0, 0.25, 3.0, 0.3
-    g0 = ground()
-    track = circle(big_r, start_angle=0.5 * np.pi)
-    contact = big_r * np.array([np.sin(theta0), -np.cos(theta0), 0.0])
-    frame = _rot((0, 0, 1), theta0)
-    centre = contact + r * frame[:, 1]
-    link = RigidBody("link", 0.0, position=contact, orientation=frame)
-    ip = 0.5 * m * r * r
-    disc = RigidBody("disc", m, inertia=(0.5 * ip, 0.5 * ip, ip), position=centre,
-                     orientation=frame)
-    j = CurveSliding("slide", g0, track, link, rotation=True)
-    arc = ArcLength(j)
-    model = Model()
-    model.add(g0, link, disc, j, Revolute("rev", link, disc, point=centre, axis=(0, 0, 1)),
-              arc, Rolling("roll", arc, disc, link, r, side=1), Gravity((0.0, -G, 0.0)))
+    big_r, r = 1.0, 0.25
+    model, *_ = rolling_disc(0.3, big_r, r)
     md = natural_frequencies(model)  # starts 0.3 rad up the track
     np.testing.assert_array_equal(md.frequency[:2], 0.0)
     # measured 4e-16 (the equilibrium takes 5 minimum-norm steps: s is neutral)

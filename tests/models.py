@@ -1,0 +1,104 @@
+"""Small models and elements shared by several test modules (written once, here).
+
+* :class:`Lag` — a first-order element declared outside ``solver/``: τ ẋ + x = X(q) with X the
+  global x coordinate of a body's reference point, pushing back on it with −k x along x.
+* :func:`rodrigues` — a rotation matrix independent of :mod:`solver.rotations`.
+* :func:`rolling_disc` — a disc rolling without slip inside a circular track.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from solver.bodies import RigidBody, ground
+from solver.curve_joints import ArcLength, CurveSliding, Rolling
+from solver.curves import circle
+from solver.element import Element, ElementSet
+from solver.forces import Gravity
+from solver.joints import Revolute
+from solver.model import Model
+from solver.state import FIRST, StateBlock
+
+G = 9.81  # m/s²
+
+
+def rodrigues(axis, angle):
+    """Rotation of ``angle`` (rad) about ``axis`` (Rodrigues; independent of solver.rotations)."""
+    n = np.asarray(axis, dtype=float)
+    n = n / np.linalg.norm(n)
+    k = np.array([[0.0, -n[2], n[1]], [n[2], 0.0, -n[0]], [-n[1], n[0], 0.0]])
+    return np.eye(3) + np.sin(angle) * k + (1.0 - np.cos(angle)) * (k @ k)
+
+
+@dataclass(eq=False)
+class Lag(Element):
+    """τ ẋ + x = X (X: global x of ``body``'s reference point, a rigid body's centre of mass
+    or a point mass); force −k x along global x on it. τ (s), k = ``gain`` (N/m)."""
+
+    name: str
+    body: Element
+    tau: float
+    gain: float
+
+    def states(self) -> list[StateBlock]:
+        return [StateBlock(self, FIRST, 1, initial=0.0, mass=np.array([[self.tau]]), units="m",
+                           long_name="lagged horizontal position")]
+
+
+class LagSet(ElementSet):
+    """All lags at once: f_x = X − x on the state rows, −k x on the bodies' x rows."""
+
+    nonconservative = True
+
+    def __init__(self, elements, system) -> None:
+        super().__init__(elements, system)
+        self.ix = np.array([system.offset[e] for e in elements])
+        self.iq = np.array([system.offset[e.body] for e in elements])
+        self.k = np.array([e.gain for e in elements])
+        self.force_idx = np.concatenate([self.ix, self.iq])
+        self.fq_rows = np.concatenate([self.ix, self.ix, self.iq])
+        self.fq_cols = np.concatenate([self.iq, self.ix, self.ix])
+        j = len(elements)
+        self._dq = np.concatenate([np.ones(j), -np.ones(j), -self.k])
+
+    def force(self, q, v, t):
+        x = q[self.ix]
+        return np.concatenate([q[self.iq] - x, -self.k * x])
+
+    def force_jacobians(self, q, v, t):
+        return self._dq, np.zeros(0)
+
+
+Lag.set_class = LagSet
+
+
+def rolling_disc(theta0, R=1.0, r=0.25, m=3.0, gravity=True):
+    """A uniform disc (radius r, mass m) rolling inside a circular track (radius R) carried by
+    ground, started θ0 (rad) up the track.
+
+    A massless link slides on the track with the Frenet triad (t, n, b) locked to it; the disc
+    centre is at contact + r n (n = inward normal), revolute to the link about z; rolling
+    ṡ + r (ω_disc − ω_link)·z = 0 (side +1). Gravity −G along y.
+
+    Returns (model, joint, arc, roll, link, disc).
+    """
+    g0 = ground()
+    track = circle(R, start_angle=0.5 * np.pi)  # lowest point at η = 1/2
+    contact = R * np.array([np.sin(theta0), -np.cos(theta0), 0.0])
+    frame = rodrigues((0.0, 0.0, 1.0), theta0)  # columns t, n, b at the contact
+    centre = contact + r * frame[:, 1]
+    link = RigidBody("link", 0.0, position=contact, orientation=frame)
+    ip = 0.5 * m * r * r
+    disc = RigidBody("disc", m, inertia=(0.5 * ip, 0.5 * ip, ip), position=centre,
+                     orientation=frame)
+    j = CurveSliding("slide", g0, track, link, rotation=True)
+    arc = ArcLength(j)
+    roll = Rolling("roll", arc, disc, link, r, side=1)
+    model = Model()
+    model.add(g0, link, disc, j, Revolute("rev", link, disc, point=centre, axis=(0.0, 0.0, 1.0)),
+              arc, roll)
+    if gravity:
+        model.add(Gravity((0.0, -G, 0.0)))
+    return model, j, arc, roll, link, disc
