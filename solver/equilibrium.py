@@ -319,10 +319,11 @@ def _balance(s: System, q: Array, lam: Array, t: float, fld: SpinField):
     return r, c, g, scale
 
 
-def _tangent(s: System, q: Array, lam: Array, t: float, g: Array, fld: SpinField):
-    """∂(r, C)/∂(q, λ): the KKT matrix without the nonholonomic rows."""
-    v = fld.velocity(q)
-    blocks = {"GT": g, "G": g}
+def static_blocks(s: System, q: Array, v: Array, lam: Array, t: float) -> tuple[dict, Array]:
+    """KKT blocks of ∂(∇V − f + Gᵀλ)/∂q at (q, v, λ, t) — stiffness K, −∂f/∂q, λ-Hessian H —
+    and the values of ∂f/∂v (Dv pattern). Shared by the equilibrium Newton and the
+    linearization."""
+    blocks = {}
     if s.block_sizes["K"]:
         blocks["K"] = s.stiffness_values(q)
     jq, jv = s.applied_jacobians(q, v, t)
@@ -330,6 +331,13 @@ def _tangent(s: System, q: Array, lam: Array, t: float, g: Array, fld: SpinField
         blocks["Dq"] = -jq
     if s.block_sizes["H"]:
         blocks["H"] = s.hessian_values(q, t, lam)
+    return blocks, jv
+
+
+def _tangent(s: System, q: Array, lam: Array, t: float, g: Array, fld: SpinField):
+    """∂(r, C)/∂(q, λ): the KKT matrix without the nonholonomic rows."""
+    blocks, jv = static_blocks(s, q, fld.velocity(q), lam, t)
+    blocks.update(GT=g, G=g)
     nm = s.n + s.mh
     mat = s.kkt(blocks)[:nm, :nm]
     if fld.active:  # d(M a*)/dq = M Ω̂², d(−f(q, v*(q)))/dq ∋ −(∂f/∂v) Ω̂

@@ -59,7 +59,7 @@ import scipy.sparse.linalg as spla
 from numpy.typing import ArrayLike, NDArray
 
 from solver.bodies import PrescribedBody
-from solver.equilibrium import Equilibrium, Spin, SpinField, equilibrium
+from solver.equilibrium import Equilibrium, Spin, SpinField, equilibrium, static_blocks
 from solver.system import System
 
 Array = NDArray[np.float64]
@@ -146,14 +146,7 @@ def linearize(system: System, q: ArrayLike, lam: ArrayLike, t: float = 0.0,
     v = fld.velocity(q)
     g = s.jacobian_values(q, t)
     if fd_step is None:
-        blocks = {}
-        if s.block_sizes["K"]:
-            blocks["K"] = s.stiffness_values(q)
-        jq, jv = s.applied_jacobians(q, v, t)
-        if s.block_sizes["Dq"]:
-            blocks["Dq"] = -jq
-        if s.block_sizes["H"]:
-            blocks["H"] = s.hessian_values(q, t, lam)
+        blocks, jv = static_blocks(s, q, v, lam, t)
         k0 = s.kkt(blocks)[:n, :n].toarray()
         d = -s.kkt({"Dv": jv})[:n, :n].toarray()
     else:
