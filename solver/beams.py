@@ -300,7 +300,7 @@ class BeamSet(ElementSet):
 
     def __init__(self, elements, system) -> None:
         super().__init__(elements, system)
-        idx, el, n, dn, wds, c, owner = [], [], [], [], [], [], []
+        idx, el, n, dn, wds, c = [], [], [], [], [], []
         n_el = 0
         for b in elements:
             o = system.offset[b]
@@ -312,33 +312,28 @@ class BeamSet(ElementSet):
             dn.append(dnb)
             wds.append(wb)
             c.append(b.sections.at(quad["s"])["stiffness"])
-            owner += [b.name] * b.n_elements
             n_el += b.n_elements
         self.idx = np.concatenate(idx)  # (E, 48) global coordinates of each element
-        self.el = np.concatenate(el)  # element of each quadrature point
-        self.h = strain_matrices(np.concatenate(n), np.concatenate(dn))  # (G, 6, 16, 16)
-        self.wds = np.concatenate(wds)
-        self.C = np.concatenate(c)
-        self.wC = self.wds[:, None, None] * self.C
-        self._owner = owner
+        el = np.concatenate(el)  # element of each quadrature point
+        h = strain_matrices(np.concatenate(n), np.concatenate(dn))  # (G, 6, 16, 16)
+        wds, stiff = np.concatenate(wds), np.concatenate(c)
         # quadrature points are generated element by element: slot of each point in its
         # element's padded stack
-        starts = np.searchsorted(self.el, np.arange(n_el))
-        width = int(np.diff(np.append(starts, len(self.el))).max())
-        self._slot = self.el * width + np.arange(len(self.el)) - starts[self.el]
+        starts = np.searchsorted(el, np.arange(n_el))
+        width = int(np.diff(np.append(starts, len(el))).max())
+        slot = el * width + np.arange(len(el)) - starts[el]
 
         def padded(a: Array) -> Array:
             out = np.zeros((n_el * width, *a.shape[1:]))
-            out[self._slot] = a
+            out[slot] = a
             return out
 
-        self._hp = padded(self.h.reshape(-1, 6, 256)).reshape(n_el, 6 * width, 256)
-        self._wp = padded(self.wds)[:, None]
-        self._Cp = padded(self.C)
-        self._wCp = padded(self.wC)
+        self._hp = padded(h.reshape(-1, 6, 256)).reshape(n_el, 6 * width, 256)
+        self._wp = padded(wds)[:, None]
+        self._Cp = padded(stiff)
+        self._wCp = padded(wds[:, None, None] * stiff)
         self._e0p = np.zeros((n_el * width, 6))
         self._e0p = self._strains(system.q0_raw)[1]  # reference strains: zero force there
-        self.e0 = self._e0p[self._slot]
         self.grad_idx = self.idx.ravel()
         self.stiff_rows = np.repeat(self.idx, 48, axis=1).ravel()
         self.stiff_cols = np.tile(self.idx, (1, 48)).ravel()
@@ -397,57 +392,72 @@ class BeamSet(ElementSet):
             kv[:, :, c, :, c] += hs
         return k.ravel()
 
-    def row_owner(self, row, holonomic=True):
-        return self.name
-
 
 Beam.set_class = BeamSet
 
 
 # ------------------------------------------------------------------------------- loads
-def section_loads(system, beam: Beam, q: Array, s: ArrayLike) -> Array:
-    """Stress resultants (N, V2, V3, T, M2, M3) at arc lengths ``s`` (m) of ``beam``.
+class SectionProbe:
+    """Stress resultants (N, V2, V3, T, M2, M3) of ``beam`` at fixed arc lengths ``s`` (m).
 
     Components are in the section frame (d1, d2, d3): axial force N, shear forces V2, V3 (N),
     torsion T and bending moments M2, M3 (N·m) — the material stress resultants
     S = C (e − e0). They are evaluated at the three Gauss points of each element, where the
     strains of the cubic interpolation are superconvergent (exact for a linear shear and a
     quadratic moment), and interpolated by the quadratic through them to ``s``, element ends
-    included. At a constrained end the joint reaction is the exact load.
+    included. At a constrained end the joint reaction is the exact load. The geometry is set
+    up once; calling the probe with (system, q) costs one small batched product.
+    """
+
+    def __init__(self, beam: Beam, s: ArrayLike) -> None:
+        s = np.atleast_1d(np.asarray(s, dtype=float))
+        if np.any(s < -1e-12 * beam.length) or np.any(s > beam.length * (1 + 1e-12)):
+            raise ValueError(f"beam {beam.name!r}: section positions must lie in 0 … "
+                             f"{beam.length:.6g} m, got {s.tolist()}")
+        e = np.clip(np.searchsorted(beam.element_ends, s, side="right") - 1, 0,
+                    beam.n_elements - 1)
+        s0, s1 = beam.element_ends[e], beam.element_ends[e + 1]
+        xg = np.polynomial.legendre.leggauss(3)[0]
+        el = np.repeat(e, 3)
+        xi_g = np.tile(xg, len(s))
+        quad = {"element": el, "xi": xi_g,
+                "s": np.repeat(s0, 3) + (xi_g + 1) / 2 * np.repeat(s1 - s0, 3),
+                "w": np.zeros(3 * len(s))}
+        n, dn, _ = beam._geometry(quad)
+        self.beam = beam
+        self.h = strain_matrices(n, dn)  # (3 len(s), 6, 16, 16)
+        self.local = 36 * el[:, None] + np.arange(48)
+        self.C = beam.sections.at(quad["s"])["stiffness"]
+        self.e0 = self._strains(beam.reference_coordinates().ravel()[self.local])
+        # quadratic Lagrange interpolation through the Gauss points
+        xi = -1.0 + 2.0 * (s - s0) / (s1 - s0)
+        lag = np.ones((len(s), 3))
+        for a in range(3):
+            for b in range(3):
+                if a != b:
+                    lag[:, a] *= (xi - xg[b]) / (xg[a] - xg[b])
+        self.lag = lag
+
+    def _strains(self, qloc: Array) -> Array:
+        v = qloc.reshape(-1, 16, 3)
+        return 0.5 * np.einsum("gkab,gab->gk", self.h, v @ np.swapaxes(v, 1, 2))
+
+    def __call__(self, system, q: Array) -> Array:
+        """(len(s), 6) resultants at the configuration q of ``system``."""
+        e = self._strains(q[system.offset[self.beam] + self.local]) - self.e0
+        stress = (self.C @ e[:, :, None])[:, :, 0].reshape(len(self.lag), 3, 6)
+        return np.einsum("ga,gak->gk", self.lag, stress)
+
+
+def section_loads(system, beam: Beam, q: Array, s: ArrayLike) -> Array:
+    """Stress resultants (N, V2, V3, T, M2, M3) at arc lengths ``s`` (m) of ``beam``, section
+    frame; see :class:`SectionProbe` (use one directly to sample the same points often).
 
     Returns
     -------
     array (len(s), 6)
     """
-    s = np.atleast_1d(np.asarray(s, dtype=float))
-    if np.any(s < -1e-12 * beam.length) or np.any(s > beam.length * (1 + 1e-12)):
-        raise ValueError(f"beam {beam.name!r}: section positions must lie in 0 … "
-                         f"{beam.length:.6g} m, got {s.tolist()}")
-    e = np.clip(np.searchsorted(beam.element_ends, s, side="right") - 1, 0, beam.n_elements - 1)
-    s0, s1 = beam.element_ends[e], beam.element_ends[e + 1]
-    xi = -1.0 + 2.0 * (s - s0) / (s1 - s0)
-    xg = np.polynomial.legendre.leggauss(3)[0]
-    el = np.repeat(e, 3)
-    quad = {"element": el, "xi": np.tile(xg, len(s)), "s": np.repeat(s0, 3) + (np.tile(xg, len(s))
-            + 1) / 2 * np.repeat(s1 - s0, 3), "w": np.zeros(3 * len(s))}
-    n, dn, _ = beam._geometry(quad)
-    h = strain_matrices(n, dn)
-    local = 36 * el[:, None] + np.arange(48)
-    qv = q[system.offset[beam] + local].reshape(-1, 16, 3)
-    qr = beam.reference_coordinates().ravel()[local].reshape(-1, 16, 3)
-
-    def strains(v):
-        return 0.5 * np.einsum("gkab,gab->gk", h, v @ np.swapaxes(v, 1, 2))
-
-    c = beam.sections.at(quad["s"])["stiffness"]
-    stress = np.einsum("gkl,gl->gk", c, strains(qv) - strains(qr)).reshape(len(s), 3, 6)
-    # quadratic Lagrange interpolation through the Gauss points
-    lag = np.ones((len(s), 3))
-    for a in range(3):
-        for b in range(3):
-            if a != b:
-                lag[:, a] *= (xi - xg[b]) / (xg[a] - xg[b])
-    return np.einsum("ga,gak->gk", lag, stress)
+    return SectionProbe(beam, s)(system, q)
 
 
 # ---------------------------------------------------------------------------- factories

@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import xarray as xr
 
-from solver.beams import Beam, section_loads
+from solver.beams import Beam, SectionProbe
 from solver.bodies import PointMass, PrescribedBody
 from solver.integrators import Integrator, make_integrator
 from solver.joints import Joint, Revolute
@@ -120,6 +120,7 @@ class _Recorder:
         self.revolutes = s.model.of_type(Revolute)
         self.joints = s.model.of_type(Joint) if reactions else []
         self.beams = s.model.of_type(Beam)
+        self.probes = [SectionProbe(b, b.node_s) for b in self.beams]
         self.loads: list = []
         self.t, self.x, self.r, self.v, self.w = [], [], [], [], []
         self.phi, self.f, self.m, self.sc = [], [], [], []
@@ -163,8 +164,7 @@ class _Recorder:
         self.m.append(ms)
         self.sc.append([q[i] for i in s.scalar_index.values()])
         if self.beams:
-            self.loads.append(np.concatenate([section_loads(s, b, q, b.node_s)
-                                              for b in self.beams]))
+            self.loads.append(np.concatenate([probe(s, q) for probe in self.probes]))
 
     def dataset(self) -> xr.Dataset:
         s = self.s
