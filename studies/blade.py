@@ -90,26 +90,21 @@ def classify(modes: Modes, system: System, beam: Beam) -> list[str]:
     nb = 12 * len(beam.nodes)
     m = system.M[o : o + nb, o : o + nb].toarray()
     phi = modes.shapes[o : o + nb]  # (12 n, modes)
-    comp = np.arange(nb).reshape(-1, 4, 3)
-    energies = []
-    for sel in (comp[:, 0, 2], comp[:, 0, 1], None, comp[:, 0, 0]):
-        if sel is None:  # directors, minus what the bending slopes account for (small)
-            sel = comp[:, 1:, :].ravel()
-        mm = m[np.ix_(sel, sel)]
-        p = phi[sel]
-        energies.append(np.real(np.einsum("im,ij,jm->m", p.conj(), mm, p)))
+    comp = np.arange(nb).reshape(-1, 4, 3)  # node, (x, d1, d2, d3), xyz
+    # kinetic energy of each family, in FAMILIES order: node z (flap), node y (lag), the
+    # directors (section rotation: torsion, plus the small rotary inertia of bending slopes),
+    # node x (axial)
+    groups = (comp[:, 0, 2], comp[:, 0, 1], comp[:, 1:, :].ravel(), comp[:, 0, 0])
+    energies = [np.real(np.einsum("im,ij,jm->m", phi[g].conj(), m[np.ix_(g, g)], phi[g]))
+                for g in groups]
     family = np.argmax(np.array(energies), axis=0)
     count = dict.fromkeys(FAMILIES, 0)
-    labels = []
+    labels = [""] * len(family)
     for k in np.argsort(modes.frequency, kind="stable"):
         fam = FAMILIES[family[k]]
         count[fam] += 1
-        labels.append((k, f"{fam} {count[fam]}"))
-    out = [""] * len(labels)
-    for k, lab in labels:
-        out[k] = lab
-    return out
-
+        labels[k] = f"{fam} {count[fam]}"
+    return labels
 
 def fanplot(speeds: ArrayLike | None = None, *, n_elements: int = 6,
             modes: tuple[str, ...] = FANPLOT_MODES) -> xr.Dataset:
