@@ -36,7 +36,9 @@ M Ω̂² − (∂f/∂v) Ω̂ (added as a sparse matrix: for a general axis Ω̂
 pattern). A neutral direction (a free rotor, a lag hinge at Ω = 0) makes it singular; the step
 is then the minimum-norm least-squares step of the dense matrix, which converges to the
 equilibrium nearest the start. Loads are ramped by passing a sequence of times (applied loads
-are functions of time): each solve starts from the previous solution.
+are functions of time): each solve starts from the previous solution. If Newton fails straight at a
+spin, the spin rate itself is ramped (Ω k/8, k = 1 … 8), since the centrifugal tension that
+stiffens a rotating structure is missing at the start.
 
 Nonholonomic rows A(q) q̇ = 0 (arc length, rolling) restrict velocities only; a static
 configuration satisfies them trivially and their multipliers are taken as zero (the
@@ -64,6 +66,7 @@ Array = NDArray[np.float64]
 DENSE_LIMIT = 6000  # largest Newton matrix solved densely (minimum norm) when it is singular
 DIAGNOSE_LIMIT = 2500  # largest one whose neutral direction is named in a failure message
 RESIDUAL_TOL = 1e-12  # relative force balance at which q is taken as converged at once
+SPIN_UP_STEPS = 8  # spin-rate continuation when Newton fails straight at the full rate
 MAX_TURN = 0.3  # largest director change of one Newton step (≈ rad)
 STEADY_TOL = 1e-8  # relative error allowed in the steadiness checks of a relative equilibrium
 
@@ -295,14 +298,36 @@ def equilibrium(model_or_system, *, t: float | Sequence[float] = 0.0, q0: ArrayL
     for k, tk in enumerate(times):
         q = fld.turn(q, fld.rate * (tk - prev_t))
         prev_t = tk
+        start = q
         q, lam, its, ok, msg = _newton(s, q, lam, float(tk), fld, tol, max_iter)
         total += its
+        if not ok and k == 0 and fld.active:
+            # the centrifugal load is the load to ramp: spin up in steps from the start
+            q, lam, its, ok = _spin_up(s, start, float(tk), spin, tol, max_iter)
+            total += its
         if not ok:
             where = f" at t = {tk:g} s (step {k + 1} of {len(times)})" if len(times) > 1 else ""
             return _result(s, q, lam, float(tk), fld, total, False, msg + where)
     if spin is not None:
         check_steady(s, q, lam, float(times[-1]), fld)
     return _result(s, q, lam, float(times[-1]), fld, total, True, "")
+
+
+def _spin_up(s: System, q: Array, t: float, spin: Spin, tol: float, max_iter: int,
+             steps: int = SPIN_UP_STEPS):
+    """Continuation in the spin rate, Ω k/steps for k = 1 … steps, each Newton starting from
+    the previous solution. Straight from a start without centrifugal tension, Newton may
+    wander (a twisted blade has no flap stiffness until it is stretched); at a fraction of
+    the rate the tension of the previous solution is nearly right."""
+    lam = None
+    total = 0
+    for k in range(1, steps + 1):
+        part = SpinField(s, Spin(spin.rate * k / steps, spin.axis, spin.origin))
+        q, lam, its, ok, _ = _newton(s, q, lam, t, part, tol, max_iter)
+        total += its
+        if not ok:
+            return q, lam, total, False
+    return q, lam, total, True
 
 
 # ---------------------------------------------------------------------- residual and tangent

@@ -69,3 +69,17 @@ def test_fanplot_bad_input_is_one_line(tmp_path, args, message):
     res = CliRunner().invoke(main, ["fanplot", *args, "--out", str(tmp_path / "f.nc")])
     assert res.exit_code == 2 and message in res.output
     assert "Traceback" not in res.output
+
+
+def test_blade_steady_spin_at_every_default_speed():
+    """The twisted blade's relative equilibrium converges at each default fan-plot speed
+    (from the straight blade Newton sees no centrifugal flap stiffness at first: the solver
+    damps large director turns and, failing that, ramps the spin rate)."""
+    from solver.equilibrium import Spin, equilibrium
+    from studies.blade import DEFAULT_SPEED_RATIOS, articulated_blade
+    from studies.uh60a import UH60A
+
+    for omega in UH60A.omega_ref * DEFAULT_SPEED_RATIOS[1:]:
+        model, _ = articulated_blade(float(omega))
+        eq = equilibrium(model, spin=Spin(float(omega), (0.0, 0.0, 1.0)))
+        assert eq.converged, (omega, eq.message)
