@@ -20,6 +20,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 from numpy.typing import ArrayLike, NDArray
+from scipy.optimize import linear_sum_assignment
 
 from solver.beams import Beam, straight_beam
 from solver.bodies import RigidBody, spinning
@@ -33,6 +34,8 @@ from studies.uh60a import UH60A, blade_sections, blade_twist, section_origin
 Array = NDArray[np.float64]
 FAMILIES = ("flap", "lag", "torsion", "axial")
 FANPLOT_MODES = ("flap 1", "flap 2", "flap 3", "flap 4", "lag 1", "lag 2", "torsion 1")
+TRACK_STEP = 0.1  # of Ω_ref: modes are named at this speed and followed in such steps
+TRACKED_EXTRA = 6  # modes followed beyond the reported ones (room for branches to cross)
 DEFAULT_SPEED_RATIOS = np.round(np.arange(0.0, 1.21, 0.1), 10)  # of Ω_ref = 27 rad/s
 
 
@@ -123,22 +126,48 @@ def fanplot(speeds: ArrayLike | None = None, *, n_elements: int = 6,
     -------
     xarray.Dataset
         ``frequency`` (Hz) over (``hub_speed`` (rad s-1), ``mode``) with the coordinate
-        ``mode_label``; NaN where a mode was not found among the computed ones.
+        ``mode_label``; NaN where a mode was not found among the computed ones. Speeds are
+        sorted. Each mode is named by its dominant motion at 0.1 Ω_ref and followed by its
+        shape (modal assurance criterion) through steps of 0.1 Ω_ref to the requested
+        speeds, so a branch keeps its name through veerings.
     """
     sp = (UH60A.omega_ref * DEFAULT_SPEED_RATIOS if speeds is None
           else np.atleast_1d(np.asarray(speeds, dtype=float)))
     if sp.ndim != 1 or not len(sp) or not np.all(np.isfinite(sp)) or np.any(sp < 0):
         raise ValueError(f"speeds = {speeds!r} must be rotor speeds ≥ 0 rad/s")
-    freq = np.full((len(sp), len(modes)), np.nan)
-    for i, omega in enumerate(sp):
+    sp = np.unique(sp)
+    # modes are named at a low speed, where they keep the character of the non-rotating
+    # blade's modes, and followed by their shapes in steps of at most TRACK_STEP: the
+    # conventional branches of a fan plot, which keep their names through veerings
+    step = TRACK_STEP * UH60A.omega_ref
+    path = np.unique(np.concatenate([sp, np.arange(1, int(np.ceil(sp.max() / step)) + 1) * step]))
+    runs = []
+    for omega in path:
         model, beam = articulated_blade(float(omega), n_elements=n_elements)
         s = System(model)
         spin = Spin(float(omega), (0.0, 0.0, 1.0)) if omega else None
         md = natural_frequencies(s, spin=spin)
-        labels = classify(md, s, beam)
+        keep = np.argsort(md.frequency, kind="stable")[: len(modes) + TRACKED_EXTRA]
+        o, nb = s.offset[beam], 12 * len(beam.nodes)
+        runs.append((md, s, beam, keep, md.shapes[o : o + nb, keep],
+                     s.M[o : o + nb, o : o + nb]))
+    anchor = int(np.argmin(np.abs(path - step)))
+    md, s, beam, keep, _, _ = runs[anchor]
+    names = np.array(classify(md, s, beam), dtype=object)[keep]
+    labels: list = [None] * len(path)
+    labels[anchor] = names
+    for order in (range(anchor + 1, len(path)), range(anchor - 1, -1, -1)):
+        prev = anchor
+        for i in order:
+            labels[i] = _follow(runs[prev], labels[prev], runs[i])
+            prev = i
+    freq = np.full((len(sp), len(modes)), np.nan)
+    for i, k in enumerate(np.searchsorted(path, sp)):
+        md, keep = runs[k][0], runs[k][3]
         for j, name in enumerate(modes):
-            if name in labels:
-                freq[i, j] = md.frequency[labels.index(name)]
+            hit = np.nonzero(labels[k] == name)[0]
+            if len(hit):
+                freq[i, j] = md.frequency[keep[hit[0]]]
     ds = xr.Dataset(coords={
         "hub_speed": ("hub_speed", sp, {"units": "rad s-1", "long_name": "rotor speed"}),
         "mode": ("mode", np.arange(len(modes)), {"long_name": "mode index"}),
@@ -155,3 +184,20 @@ def fanplot(speeds: ArrayLike | None = None, *, n_elements: int = 6,
     )
     return ds
 
+
+def _follow(prev_run, prev_labels, run) -> NDArray[np.object_]:
+    """Labels at one speed from those at the neighbouring one: each mode takes the label of
+    the previous mode its shape resembles most (mass-weighted modal assurance criterion,
+    one-to-one by the assignment of largest total resemblance)."""
+    phi0, m0 = prev_run[4], prev_run[5]
+    phi1 = run[4]
+
+    def inner(a, b):
+        return a.conj().T @ (m0 @ b)
+
+    mac = np.abs(inner(phi0, phi1)) ** 2 / np.outer(
+        np.real(np.diag(inner(phi0, phi0))), np.real(np.diag(inner(phi1, phi1))))
+    rows, cols = linear_sum_assignment(-mac)
+    out = np.array([None] * phi1.shape[1], dtype=object)
+    out[cols] = prev_labels[rows]
+    return out
