@@ -15,7 +15,12 @@ defaults to nothing, so a set implements only its own physics):
   ``(stiff_rows, stiff_cols)``;
 * **generalized force** f(q, v, t) (dampers, loads, first-order right-hand sides) at
   ``force_idx`` with its Jacobians ∂f/∂q at ``(fq_rows, fq_cols)`` and ∂f/∂v at
-  ``(fv_rows, fv_cols)``; the integrators book its work;
+  ``(fv_rows, fv_cols)``; the integrators book its work. A set with ``uses_acceleration``
+  (apparent mass of a body moving through a fluid) has f(q, v, t, a), affine in the
+  accelerations a = q̈, takes ``a`` as a fourth argument of :meth:`~ElementSet.force` and
+  :meth:`~ElementSet.force_jacobians`, and gives ∂f/∂a at ``(fa_rows, fa_cols)`` from
+  :meth:`~ElementSet.acceleration_jacobian`; every scheme passes the acceleration of its own
+  kinematics (``ep``: (v_f − v_i)/h, ``galpha``: q̈_{n+1});
 * **holonomic rows** C(q, t) = 0 (``n_holonomic``): values and Jacobian at the flat pattern
   ``(hol_rows, hol_cols)`` (local rows), the exact discrete derivative Ḡ with
   Ḡ·(q_f − q_i) = C_f − C_i, the λ-weighted Hessian at ``(hess_rows, hess_cols)``, ∂C/∂t and
@@ -87,6 +92,9 @@ class ElementSet:
     fq_cols: IArray = EMPTY_I
     fv_rows: IArray = EMPTY_I  # pattern of ∂f/∂v
     fv_cols: IArray = EMPTY_I
+    fa_rows: IArray = EMPTY_I  # pattern of ∂f/∂a (sets with uses_acceleration)
+    fa_cols: IArray = EMPTY_I
+    uses_acceleration: bool = False
     n_holonomic: int = 0
     hol_rows: IArray = EMPTY_I
     hol_cols: IArray = EMPTY_I
@@ -135,6 +143,10 @@ class ElementSet:
     def force_jacobians(self, q: Array, v: Array, t: float) -> tuple[Array, Array]:
         """(∂f/∂q at ``(fq_rows, fq_cols)``, ∂f/∂v at ``(fv_rows, fv_cols)``)."""
         return EMPTY_F, EMPTY_F
+
+    def acceleration_jacobian(self, q: Array, v: Array, t: float, a: Array) -> Array:
+        """∂f/∂a at ``(fa_rows, fa_cols)`` (sets with ``uses_acceleration``)."""
+        return EMPTY_F
 
     # -- holonomic rows -------------------------------------------------------------------
     def constraint(self, q: Array, t: float) -> tuple[Array, Array]:

@@ -335,23 +335,25 @@ def _balance(s: System, q: Array, lam: Array, t: float, fld: SpinField):
     """Force balance r = M a* + ∇V − f(q, v*, t) + Gᵀλ, the constraints C, and the size of the
     largest force term (the scale r is judged against)."""
     v = fld.velocity(q)
+    a = fld.acceleration(q)
     c, g = s.constraint_and_jacobian(q, t)
-    terms = [s.gradient(q), -s.applied(q, v, t), s.gmul_T(g, lam)]
+    terms = [s.gradient(q), -s.applied(q, v, t, a), s.gmul_T(g, lam)]
     if fld.active:
-        terms.append(s.M @ fld.acceleration(q))
+        terms.append(s.M @ a)
     r = np.sum(terms, axis=0)
     scale = max(float(np.abs(x).max()) if x.size else 0.0 for x in terms)
     return r, c, g, scale
 
 
-def static_blocks(s: System, q: Array, v: Array, lam: Array, t: float) -> tuple[dict, Array]:
-    """KKT blocks of ∂(∇V − f + Gᵀλ)/∂q at (q, v, λ, t) — stiffness K, −∂f/∂q, λ-Hessian H —
-    and the values of ∂f/∂v (Dv pattern). Shared by the equilibrium Newton and the
+def static_blocks(s: System, q: Array, v: Array, lam: Array, t: float,
+                  a: Array | None = None) -> tuple[dict, Array]:
+    """KKT blocks of ∂(∇V − f + Gᵀλ)/∂q at (q, v, a, λ, t) — stiffness K, −∂f/∂q, λ-Hessian
+    H — and the values of ∂f/∂v (Dv pattern). Shared by the equilibrium Newton and the
     linearization."""
     blocks = {}
     if s.block_sizes["K"]:
         blocks["K"] = s.stiffness_values(q)
-    jq, jv = s.applied_jacobians(q, v, t)
+    jq, jv = s.applied_jacobians(q, v, t, a)
     if s.block_sizes["Dq"]:
         blocks["Dq"] = -jq
     if s.block_sizes["H"]:
@@ -361,15 +363,19 @@ def static_blocks(s: System, q: Array, v: Array, lam: Array, t: float) -> tuple[
 
 def _tangent(s: System, q: Array, lam: Array, t: float, g: Array, fld: SpinField):
     """∂(r, C)/∂(q, λ): the KKT matrix without the nonholonomic rows."""
-    blocks, jv = static_blocks(s, q, fld.velocity(q), lam, t)
+    v, a = fld.velocity(q), fld.acceleration(q)
+    blocks, jv = static_blocks(s, q, v, lam, t, a)
     blocks.update(GT=g, G=g)
     nm = s.n + s.mh
     mat = s.kkt(blocks)[:nm, :nm]
-    if fld.active:  # d(M a*)/dq = M Ω̂², d(−f(q, v*(q)))/dq ∋ −(∂f/∂v) Ω̂
+    if fld.active:  # d(M a*)/dq = M Ω̂², d(−f(q, v*(q), a*(q)))/dq ∋ −(∂f/∂v) Ω̂ − (∂f/∂a) Ω̂²
         w = fld.W
         extra = s.M @ (w @ w)
         if s.block_sizes["Dv"]:
             extra = extra - s.kkt({"Dv": jv})[: s.n, : s.n] @ w
+        if s.block_sizes["Da"]:
+            fa = s.kkt({"Da": s.acceleration_jacobian(q, v, t, a)})[: s.n, : s.n]
+            extra = extra - fa @ (w @ w)
         mat = mat + sp.block_diag([extra, sp.csr_matrix((s.mh, s.mh))], format="csc")
     return mat.tocsc()
 

@@ -68,7 +68,8 @@ class Tangent:
     Jacobians, with dq_dx the derivative of the evaluation point q by the unknown Δq and dv_dx
     (per unknown) that of v; hess: of the constraint Hessian; gbar: Jacobian values for the
     Gᵀμ columns; g_rows: for the constraint rows; a_weight: weight of ∂(A·w)/∂q in the
-    nonholonomic rows, w: the vector A multiplies there.
+    nonholonomic rows, w: the vector A multiplies there; acc: the accelerations the added
+    masses see, da_dx: their derivative by the unknown Δq.
     """
 
     q: Array
@@ -86,6 +87,8 @@ class Tangent:
     g_rows: Array
     a_weight: float
     w: Array
+    acc: Array | None = None
+    da_dx: float = 0.0
 
 
 class Integrator:
@@ -219,9 +222,11 @@ class Integrator:
         if s.block_sizes["K"]:
             blocks["K"] = w.stiff * s.stiffness_values(w.q)
         if s.block_sizes["Dq"] or s.block_sizes["Dv"]:
-            jq, jv = s.applied_jacobians(w.q, w.v, w.t)
+            jq, jv = s.applied_jacobians(w.q, w.v, w.t, w.acc)
             blocks["Dq"] = -w.force * w.dq_dx * jq
             blocks["Dv"] = -w.force * jv * w.dv_dx[s.Dv_cols]
+        if s.block_sizes["Da"]:
+            blocks["Da"] = -w.force * w.da_dx * s.acceleration_jacobian(w.q, w.v, w.t, w.acc)
         if s.block_sizes["H"]:
             blocks["H"] = w.hess * s.hessian_values(w.q, w.t, w.mu)
         blocks["GT"], blocks["G"] = w.gbar, w.g_rows
@@ -312,6 +317,12 @@ class Midpoint(Integrator):
         dq = x[:n]
         return dq, self.q + dq, self.q + 0.5 * dq, x[n : n + mh], x[n + mh :]
 
+    def _acc(self, dq):
+        """(v_f − v_i)/h, the acceleration of the step (for added masses), or None."""
+        if not self.sys.accel_sets:
+            return None
+        return (dq / self.h - self.v) / (self.alpha * self.h)
+
     def _residual(self, x):
         s, h, c = self.sys, self.h, self._c
         qi = self.q
@@ -320,7 +331,7 @@ class Midpoint(Integrator):
         r1 = s.M @ dq - self._hMv
         if len(self.first):
             r1 += (self.alpha * h) * (s.A1 @ dq)
-        r1 += c * (s.discrete_gradient(qi, qf) - s.applied(qm, dq / h, self._tm))
+        r1 += c * (s.discrete_gradient(qi, qf) - s.applied(qm, dq / h, self._tm, self._acc(dq)))
         r1 += s.gmul_T(gbar, mu)
         parts = [r1, s.constraint(qf, self._tf)]
         if s.mn:
@@ -335,7 +346,8 @@ class Midpoint(Integrator):
         return Tangent(q=qm, v=dq / h, t=self._tm, mu=mu, mass=1.0, first=self.alpha * h,
                        stiff=0.5 * c, force=c, dq_dx=0.5, dv_dx=np.full(s.n, 1.0 / h),
                        hess=0.5, gbar=s.discrete_jacobian_values(self.q, qf, self.t, self._tf),
-                       g_rows=s.jacobian_values(qf, self._tf), a_weight=0.5, w=dq)
+                       g_rows=s.jacobian_values(qf, self._tf), a_weight=0.5, w=dq,
+                       acc=self._acc(dq), da_dx=1.0 / c)
 
     def _finish(self, x):
         s, h, c = self.sys, self.h, self._c
@@ -345,7 +357,7 @@ class Midpoint(Integrator):
         vf[self.first] = dq[self.first] / h  # the mean rate of the midpoint rule
         gbar = s.discrete_jacobian_values(self.q, qf, self.t, self._tf)
         lam = mu / c
-        self._book_work(lam, gbar, dq, s.applied(qm, dq / h, self._tm))
+        self._book_work(lam, gbar, dq, s.applied(qm, dq / h, self._tm, self._acc(dq)))
         self.q, self.v, self.t, self.lam, self.nu = qf, vf, self._tf, lam, nu / c
 
 
@@ -425,7 +437,7 @@ class GeneralizedAlpha(Integrator):
             rate = np.zeros(s.n)
             rate[self.first] = vf[self.first]
             r1 += sc * (s.A1 @ rate)
-        r1 += sc * (s.gradient(qf) - s.applied(qf, vf, self._tf))
+        r1 += sc * (s.gradient(qf) - s.applied(qf, vf, self._tf, self._acc(_anew)))
         r1 += s.gmul_T(gf, mu)
         parts = [r1, c]
         if s.mn:
@@ -436,11 +448,18 @@ class GeneralizedAlpha(Integrator):
 
     def _tangent_weights(self, x):
         s, sc = self.sys, self._sc
-        _dq, qf, vf, _anew, mu, _nu = self._unpack(x)
+        _dq, qf, vf, anew, mu, _nu = self._unpack(x)
         gf = s.jacobian_values(qf, self._tf)
         return Tangent(q=qf, v=vf, t=self._tf, mu=mu, mass=1.0, first=sc * self._k1,
                        stiff=sc, force=sc, dq_dx=1.0, dv_dx=self._dv_dx, hess=1.0, gbar=gf,
-                       g_rows=gf, a_weight=self.beta * self.h / self.gamma, w=vf)
+                       g_rows=gf, a_weight=self.beta * self.h / self.gamma, w=vf,
+                       acc=self._acc(anew), da_dx=1.0 / sc)
+
+    def _acc(self, anew):
+        """q̈_{n+1} from the α-acceleration (what added masses see), or None."""
+        if not self.sys.accel_sets:
+            return None
+        return ((1 - self.am) * anew + self.am * self.acc - self.af * self.qdd) / (1 - self.af)
 
     def _finish(self, x):
         s, h = self.sys, self.h
@@ -455,7 +474,8 @@ class GeneralizedAlpha(Integrator):
         qm, vm = self.q + 0.5 * dq, 0.5 * (self.v + vf)
         gm = s.jacobian_values(qm, self.t + 0.5 * h)
         # work booked with midpoint values (the scheme has no exact discrete energy balance)
-        self._book_work(0.5 * (self.lam + lam), gm, dq, s.applied(qm, vm, self.t + 0.5 * h))
+        am_ = 0.5 * (self.qdd + qdd) if s.accel_sets else None
+        self._book_work(0.5 * (self.lam + lam), gm, dq, s.applied(qm, vm, self.t + 0.5 * h, am_))
         self.q, self.v, self.t, self.lam, self.nu = qf, vf, self._tf, lam, nuv
         self.acc, self.qdd = anew, qdd
 
@@ -588,9 +608,11 @@ def project_velocities(s: System, q: Array, v: Array, t: float) -> Array:
 
 def initial_accelerations(s: System, q: Array, v: Array, t: float, multipliers: bool = False):
     """q̈ (and ẋ of the first-order states) from
-    [[M + A, Gᵀ, Aₙᵀ], [G, 0, 0], [Aₙ, 0, 0]] [q̈; λ; ν] = [f − ∇V; −γ; −γ_A]."""
+    [[M + A − ∂f/∂a, Gᵀ, Aₙᵀ], [G, 0, 0], [Aₙ, 0, 0]] [q̈; λ; ν] = [f(a = 0) − ∇V; −γ; −γ_A]."""
     g = s.jacobian_values(q, t)
     blocks = {"M": s.M_vals, "A1": s.A1_vals, "GT": g, "G": g}
+    if s.block_sizes["Da"]:  # added masses: f = f(a = 0) + (∂f/∂a) a, affine in a
+        blocks["Da"] = -s.acceleration_jacobian(q, v, t)
     if s.mn:
         a = s.nonholonomic_values(q)
         blocks["AT"] = blocks["A"] = a

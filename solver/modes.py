@@ -146,12 +146,17 @@ def linearize(system: System, q: ArrayLike, lam: ArrayLike, t: float = 0.0,
     v = fld.velocity(q)
     g = s.jacobian_values(q, t)
     if fd_step is None:
-        blocks, jv = static_blocks(s, q, v, lam, t)
+        blocks, jv = static_blocks(s, q, v, lam, t, fld.acceleration(q))
         k0 = s.kkt(blocks)[:n, :n].toarray()
         d = -s.kkt({"Dv": jv})[:n, :n].toarray()
     else:
         k0, d = _finite_difference(s, q, v, lam, t, g, fd_step)
-    mw = s.M @ fld.W  # sparse products: M and Ω̂ are block diagonal
+    # added masses (fluid apparent mass) join the mass matrix: M_eff = M − ∂f/∂a
+    m_eff = s.M
+    if s.block_sizes["Da"]:
+        fa = s.acceleration_jacobian(q, v, t, fld.acceleration(q))
+        m_eff = (s.M - s.kkt({"Da": fa})[:n, :n]).tocsr()
+    mw = m_eff @ fld.W  # sparse products: M and Ω̂ are block diagonal
     gm = sp.csr_matrix((g, (s.G_rows, s.G_cols)), shape=(s.mh, n)).toarray()
     c = d + s.A1.toarray() + 2.0 * mw.toarray()
     k = k0 + (mw @ fld.W).toarray() + (fld.W.T @ d.T).T
@@ -165,7 +170,7 @@ def linearize(system: System, q: ArrayLike, lam: ArrayLike, t: float = 0.0,
         b_n = a_n @ w + da
     else:
         a_n = b_n = np.zeros((0, n))
-    return Linearization(M=s.M.toarray(), C=c, K=k, G=gm, Z=_null_space(gm, n), A_n=a_n, B_n=b_n,
+    return Linearization(M=m_eff.toarray(), C=c, K=k, G=gm, Z=_null_space(gm, n), A_n=a_n, B_n=b_n,
                          q=q.copy(), lam=lam.copy(), t=float(t), spin=spin, system=s)
 
 

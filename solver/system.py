@@ -6,7 +6,8 @@ once. Holonomic rows are ordered: the quadratic tensor (orthonormality, prescrib
 lower pairs) first, then the other holonomic sets in model order; nonholonomic rows follow.
 
 The Newton (KKT) matrix is assembled from a list of named blocks — mass, first-order mass,
-stiffness, force Jacobians, constraint Hessian, Gᵀ, G, Aᵀ, A — whose patterns hold the
+stiffness, force Jacobians (by q, v and, for added masses, by the accelerations), constraint
+Hessian, Gᵀ, G, Aᵀ, A — whose patterns hold the
 structural non-zeros of the elements only. The pattern is built once; each iteration scatters
 the block values with one ``np.bincount``. The model is read, never written.
 """
@@ -25,7 +26,7 @@ from solver.state import Layout
 Array = NDArray[np.float64]
 BODY_TYPES = (RigidBody, PointMass, PrescribedBody)
 # Blocks of the Newton matrix, in pattern order.
-BLOCKS = ("M", "A1", "K", "Dq", "Dv", "H", "GT", "G", "AT", "A")
+BLOCKS = ("M", "A1", "K", "Dq", "Dv", "Da", "H", "GT", "G", "AT", "A")
 
 
 class System:
@@ -65,6 +66,7 @@ class System:
         self.force_sets = [s for s in sets if len(s.force_idx)]
         self.stiff_sets = [s for s in sets if len(s.stiff_rows)]
         self.fjac_sets = [s for s in sets if len(s.fq_rows) or len(s.fv_rows)]
+        self.accel_sets = [s for s in sets if s.uses_acceleration]
         m = 0
         self.hol_offset: dict = {}
         for s in self.hol_sets:
@@ -176,6 +178,8 @@ class System:
             "Dq": (cat([s.fq_rows for s in self.fjac_sets]),
                    cat([s.fq_cols for s in self.fjac_sets])),
             "Dv": (cat([s.fv_rows for s in self.fjac_sets]), self.Dv_cols),
+            "Da": (cat([s.fa_rows for s in self.accel_sets]),
+                   cat([s.fa_cols for s in self.accel_sets])),
             "H": (cat([s.hess_rows for s in self.hol_sets]),
                   cat([s.hess_cols for s in self.hol_sets])),
             "GT": (self.G_cols, n + self.G_rows),
@@ -231,18 +235,36 @@ class System:
     def stiffness_values(self, q: Array) -> Array:
         return _cat([s.stiffness(q) for s in self.stiff_sets], float)
 
-    def applied(self, q: Array, v: Array, t: float) -> Array:
-        """Generalized forces of dampers, loads and first-order right-hand sides."""
-        return self._gather(self._force_idx, [s.force(q, v, t) for s in self.force_sets])
+    def applied(self, q: Array, v: Array, t: float, a: Array | None = None) -> Array:
+        """Generalized forces of dampers, loads and first-order right-hand sides; ``a`` (the
+        accelerations q̈) reaches the sets with added masses (zero if not given)."""
+        a = self._acc(a)
+        return self._gather(self._force_idx,
+                            [s.force(q, v, t, a) if s.uses_acceleration else s.force(q, v, t)
+                             for s in self.force_sets])
 
-    def applied_jacobians(self, q: Array, v: Array, t: float) -> tuple[Array, Array]:
+    def _acc(self, a: Array | None) -> Array | None:
+        if a is None and self.accel_sets:
+            return np.zeros(self.n)
+        return a
+
+    def applied_jacobians(self, q: Array, v: Array, t: float,
+                          a: Array | None = None) -> tuple[Array, Array]:
         """(∂f/∂q values in the Dq block, ∂f/∂v values in the Dv block)."""
+        a = self._acc(a)
         jq, jv = [], []
         for s in self.fjac_sets:
-            a, b = s.force_jacobians(q, v, t)
-            jq.append(a)
-            jv.append(b)
+            x, y = (s.force_jacobians(q, v, t, a) if s.uses_acceleration
+                    else s.force_jacobians(q, v, t))
+            jq.append(x)
+            jv.append(y)
         return _cat(jq, float), _cat(jv, float)
+
+    def acceleration_jacobian(self, q: Array, v: Array, t: float,
+                              a: Array | None = None) -> Array:
+        """∂f/∂a values in the Da block (added masses)."""
+        a = self._acc(a)
+        return _cat([s.acceleration_jacobian(q, v, t, a) for s in self.accel_sets], float)
 
     def constraint(self, q: Array, t: float) -> Array:
         """All holonomic rows C(q, t) (length mh)."""

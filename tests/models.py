@@ -2,6 +2,8 @@
 
 * :class:`Lag` — a first-order element declared outside ``solver/``: τ ẋ + x = X(q) with X the
   global x coordinate of a body's reference point, pushing back on it with −k x along x.
+* :class:`AddedMass` — an element with acceleration-dependent force (apparent mass along a
+  body-fixed direction), declared outside ``solver/``.
 * :func:`rodrigues` — a rotation matrix independent of :mod:`solver.rotations`.
 * :func:`rolling_disc` — a disc rolling without slip inside a circular track.
 """
@@ -72,6 +74,53 @@ class LagSet(ElementSet):
 
 
 Lag.set_class = LagSet
+
+
+@dataclass(eq=False)
+class AddedMass(Element):
+    """Apparent mass m_a (kg) along the body-fixed director d_k of a rigid body, at its centre:
+    f = −m_a d_k (d_k·ẍ), the reaction of a fluid that is accelerated with the body's normal
+    motion (a flat plate's added mass). Needs the accelerations: ``uses_acceleration``."""
+
+    name: str
+    body: Element
+    mass: float
+    director: int = 2  # k: 1, 2 or 3
+
+
+class AddedMassSet(ElementSet):
+    nonconservative = True
+    uses_acceleration = True
+
+    def __init__(self, elements, system) -> None:
+        super().__init__(elements, system)
+        o = np.array([system.offset[e.body] for e in elements])
+        self.ix = o[:, None] + np.arange(3)  # centre (J, 3)
+        self.idk = o[:, None] + 3 * np.array([e.director for e in elements])[:, None] \
+            + np.arange(3)  # d_k (J, 3)
+        self.m = np.array([e.mass for e in elements])
+        self.force_idx = self.ix.ravel()
+        rows = np.repeat(self.ix, 3, axis=1).ravel()
+        self.fq_rows, self.fq_cols = rows, np.tile(self.idk, (1, 3)).ravel()
+        self.fa_rows, self.fa_cols = rows, np.tile(self.ix, (1, 3)).ravel()
+
+    def force(self, q, v, t, a):
+        d, acc = q[self.idk], a[self.ix]
+        return (-self.m[:, None] * d * np.einsum("ij,ij->i", d, acc)[:, None]).ravel()
+
+    def force_jacobians(self, q, v, t, a):
+        d, acc = q[self.idk], a[self.ix]
+        da = np.einsum("ij,ij->i", d, acc)
+        jq = -self.m[:, None, None] * (da[:, None, None] * np.eye(3) + d[:, :, None]
+                                       * acc[:, None, :])
+        return jq.ravel(), np.zeros(0)
+
+    def acceleration_jacobian(self, q, v, t, a):
+        d = q[self.idk]
+        return (-self.m[:, None, None] * d[:, :, None] * d[:, None, :]).ravel()
+
+
+AddedMass.set_class = AddedMassSet
 
 
 def rolling_disc(theta0, R=1.0, r=0.25, m=3.0, gravity=True):
