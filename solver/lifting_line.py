@@ -490,7 +490,8 @@ def _support_map(line: LiftingLine, system) -> tuple[NDArray[np.int64], Array]:
         idx = o + 36 * e[:, None] + np.arange(48)[None, :]
         for a in range(4):
             smat[:, :, 12 * a : 12 * a + 12] = n[:, a, None, None] * np.eye(12)
-        # ds from the reference geometry: |dX/dξ| scales the Gauss weights of the segments
+        # ξ linear in the arc length inside an element (its inner nodes sit at equal arc
+        # lengths); the Gauss weights ds are arc lengths already
         return idx, smat
     # a body: x(s) = x + s d1, directors unchanged; the other 36 columns repeat its indices
     idx = o + np.tile(np.arange(12), 4)[None, :].repeat(k, axis=0)
