@@ -4,6 +4,7 @@
   global x coordinate of a body's reference point, pushing back on it with −k x along x.
 * :class:`AddedMass` — an element with acceleration-dependent force (apparent mass along a
   body-fixed direction), declared outside ``solver/``.
+* :func:`rod_pendulum` — a slender rod hinged at one end, with an extra element attached.
 * :func:`rodrigues` — a rotation matrix independent of :mod:`solver.rotations`.
 * :func:`rolling_disc` — a disc rolling without slip inside a circular track.
 """
@@ -121,6 +122,21 @@ class AddedMassSet(ElementSet):
 
 
 AddedMass.set_class = AddedMassSet
+
+
+def rod_pendulum(mass, length, theta0, extra, g=G):
+    """A uniform slender rod (``mass`` kg, ``length`` m; axis d1) hinged at the origin about z,
+    started ``theta0`` rad from hanging down, under gravity −g y, with ``extra(rod)`` (an
+    element built on the rod) added. Returns (model, rod)."""
+    j_cm = mass * length**2 / 12.0
+    ground_ = ground()
+    c = np.array([0.5 * length * np.sin(theta0), -0.5 * length * np.cos(theta0), 0.0])
+    rod = RigidBody("rod", mass, inertia=(0.0, j_cm, j_cm), position=c,
+                    orientation=rodrigues((0, 0, 1), theta0 - np.pi / 2))
+    model = Model()
+    model.add(ground_, rod, Revolute("pivot", ground_, rod, point=(0, 0, 0), axis=(0, 0, 1)),
+              Gravity((0.0, -g, 0.0)), extra(rod))
+    return model, rod
 
 
 def rolling_disc(theta0, R=1.0, r=0.25, m=3.0, gravity=True):

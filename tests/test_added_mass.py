@@ -14,13 +14,8 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from solver.bodies import RigidBody, ground
-from solver.forces import Gravity
-from solver.joints import Revolute
-from solver.model import Model
-from solver.rotations import rotation_about
 from solver.simulation import simulate
-from tests.models import AddedMass
+from tests.models import AddedMass, rod_pendulum
 
 M, L, G, MA = 1.0, 1.0, 9.81, 0.7
 J_CM = M * L * L / 12.0
@@ -29,14 +24,7 @@ T_END = 1.0
 
 
 def model():
-    g = ground()
-    c = np.array([0.5 * L * np.sin(THETA0), -0.5 * L * np.cos(THETA0), 0.0])
-    rod = RigidBody("rod", M, inertia=(0.0, J_CM, J_CM), position=c,
-                    orientation=rotation_about((0, 0, 1), THETA0 - np.pi / 2))
-    mod = Model()
-    mod.add(g, rod, Revolute("pivot", g, rod, point=(0, 0, 0), axis=(0, 0, 1)),
-            Gravity((0.0, -G, 0.0)), AddedMass("fluid", rod, MA, director=2))
-    return mod, rod
+    return rod_pendulum(M, L, THETA0, lambda rod: AddedMass("fluid", rod, MA, director=2), G)
 
 
 def reference(t_eval):
