@@ -34,6 +34,7 @@ h → 0 (Bottasso, Bauchau & Cardona 2007).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
@@ -136,6 +137,29 @@ class Integrator:
         self.n_factorizations = 0
         self.scale = max(1.0, float(np.abs(self.q).max()))
         self.conservative = not system.has_nonconservative
+
+    # what a step starts from; schemes with more history extend it
+    STATE: tuple[str, ...] = ("t", "q", "v", "lam", "nu")
+
+    def state(self) -> dict[str, Any]:
+        """A copy of what the next step starts from (time, positions, velocities, multipliers
+        and the scheme's own history), for :meth:`restore`."""
+        return {k: np.copy(getattr(self, k)) if k != "t" else self.t for k in self.STATE}
+
+    def restore(self, state: dict[str, Any]) -> None:
+        """Continue from :meth:`state` of an integrator of the same scheme on a system of the
+        same layout (e.g. the same model with other damper values): the next step is the one
+        the other integrator would have taken, with this system's forces."""
+        missing = set(self.STATE) - set(state)
+        if missing:
+            raise ValueError(f"restore: state lacks {sorted(missing)} (a {self.name!r} state "
+                             "is needed)")
+        if np.shape(state["q"]) != self.q.shape:
+            raise ValueError(f"restore: state has {np.size(state['q'])} unknowns, the system "
+                             f"{self.q.size}")
+        for k in self.STATE:
+            setattr(self, k, float(state[k]) if k == "t" else np.array(state[k], dtype=float))
+        self._x_hist = ()
 
     def energy(self, q: Array | None = None, v: Array | None = None) -> float:
         q = self.q if q is None else q
@@ -375,6 +399,7 @@ class GeneralizedAlpha(Integrator):
     """Generalized-α with spectral radius at infinite frequency ρ∞ ∈ [0, 1]."""
 
     name = "galpha"
+    STATE = (*Integrator.STATE, "acc", "qdd")  # the acceleration history of the α method
 
     def __init__(self, system: System, h: float, rho_inf: float = 0.8, **kw) -> None:
         if not (0.0 <= rho_inf <= 1.0):

@@ -54,6 +54,15 @@ class LinearSolver:
         return None
 
 
+def _factor(solver, jacobian, x) -> str:
+    """Factor the Newton matrix at x; a message if it is singular or cannot be evaluated (an
+    iterate so far from the solution that a term divides by zero is a diverged Newton)."""
+    try:
+        return solver.factor(jacobian(x))
+    except ArithmeticError as exc:
+        return f"Newton diverged (the Newton matrix is not finite: {exc})"
+
+
 def newton(residual: Callable[[NDArray], NDArray], jacobian: Callable[[NDArray], object],
            x0: NDArray, converged: Callable[[NDArray, NDArray], bool], solver: LinearSolver,
            reuse: bool = True, full: bool = False) -> NewtonResult:
@@ -69,14 +78,17 @@ def newton(residual: Callable[[NDArray], NDArray], jacobian: Callable[[NDArray],
     started_stale = reuse and solver.lu is not None
     stale_bad = False
     if not reuse or solver.lu is None:
-        msg = solver.factor(jacobian(x))
+        msg = _factor(solver, jacobian, x)
         nfact += 1
         fresh = True
         if msg:
             return NewtonResult(x, False, 0, nfact, msg)
     prev = np.inf
     for it in range(1, NEWTON_MAXITER + 1):
-        r = residual(x)
+        try:
+            r = residual(x)
+        except ArithmeticError:  # e.g. a division by zero far from the solution
+            r = np.full_like(x, np.nan)
         if not np.all(np.isfinite(r)):
             return NewtonResult(x, False, it, nfact, "non-finite residual (Newton diverged)",
                                 residual=r)
@@ -89,7 +101,7 @@ def newton(residual: Callable[[NDArray], NDArray], jacobian: Callable[[NDArray],
         if full:
             if converged(x, dx) or (rate > 0.5 and converged(x, dx * ROUNDOFF_FLOOR)):
                 return NewtonResult(x, True, it, nfact)
-            msg = solver.factor(jacobian(x))
+            msg = _factor(solver, jacobian, x)
             nfact += 1
             if msg:
                 return NewtonResult(x, False, it, nfact, msg)
@@ -105,7 +117,7 @@ def newton(residual: Callable[[NDArray], NDArray], jacobian: Callable[[NDArray],
                                     f"Newton diverged (contraction rate {rate:.2f} ≥ 1)",
                                     residual=r)
             fresh = True
-            msg = solver.factor(jacobian(x))
+            msg = _factor(solver, jacobian, x)
             nfact += 1
             if msg:
                 return NewtonResult(x, False, it, nfact, msg)
