@@ -25,7 +25,7 @@ def sweep_once(workers: int) -> dict:
 
     with tempfile.TemporaryDirectory() as tmp:
         study = Path(tmp) / "study.toml"
-        study.write_text(default_study().read_text())
+        study.write_text(default_study("hub").read_text())
         t0 = time.perf_counter()
         archive = run_sweep(study, Path(tmp) / "out", workers=workers, progress=False)
         wall = time.perf_counter() - t0

@@ -36,7 +36,8 @@ from pipelines.study_commands import collar, pendulum
 from pipelines.sweep import CASES_DIR, StudyError, SweepError, run_sweep
 from studies.parameters import ParameterError
 
-DEFAULT_STUDY = "default_study.toml"
+# The built-in study of each model `bifilar run --model` offers.
+BUILT_IN_STUDIES = {"rotor": "rotor_study.toml", "hub": "hub_study.toml"}
 EXIT_FAILED_CASES = 1
 EXIT_USER_ERROR = 2
 EXIT_INTERRUPTED = 130
@@ -46,9 +47,10 @@ USER_ERRORS = (StudyError, ParameterError, ArchiveError, SweepError, FileNotFoun
                InputError)
 
 
-def default_study() -> Traversable:
-    """The built-in study: the paper's Table 1 cases 0–3 on the hub model."""
-    return resources.files("studies") / DEFAULT_STUDY
+def default_study(model: str = "rotor") -> Traversable:
+    """The built-in study of ``model``: the paper's Table 1 cases 0–3 and the linear
+    equivalent of case 1, on the rotor model (default) or the hub model."""
+    return resources.files("studies") / BUILT_IN_STUDIES[model]
 
 
 def _fail(message: str) -> NoReturn:
@@ -229,22 +231,30 @@ def plot(archive: Path, out_dir: Path, formats: tuple[str, ...]) -> None:
 @click.option("--out", "out_dir", default=Path("results"), show_default=True,
               type=click.Path(file_okay=False, path_type=Path),
               help="Output directory: cases/, archive.nc and plots/.")
+@click.option("--model", "model", default="rotor", show_default=True,
+              type=click.Choice(sorted(BUILT_IN_STUDIES)),
+              help="rotor: the UH-60 rotor with elastic blades and aerodynamics (the paper's "
+                   "model); hub: a rigid hub with assumed blade shears (minutes, not hours).")
 @workers_option
 @scheduler_option
 @click.pass_context
-def run(ctx: click.Context, out_dir: Path, workers: int | None, scheduler: str | None) -> None:
-    """Run the built-in study (the paper's Table 1, cases 0-3) and plot it into DIR/plots.
+def run(ctx: click.Context, out_dir: Path, model: str, workers: int | None,
+        scheduler: str | None) -> None:
+    """Run the built-in study (the paper's Table 1, cases 0-3, and the linear equivalent of
+    case 1) on the rotor or the hub model, and plot it into DIR/plots.
 
     Exit status 0 if every case is ok, 1 if some failed (the ok ones are still plotted).
     """
     from pipelines.plots import plot_archive
 
     _check_cluster(workers, scheduler)
-    command = _command_line(ctx, "--out", str(out_dir), *_cluster_args(workers, scheduler))
+    command = _command_line(ctx, "--out", str(out_dir), "--model", model,
+                            *_cluster_args(workers, scheduler))
     with _user_errors():
         check_output_dir(out_dir)
         check_output_dir(out_dir / "plots", "--out")
-    with _user_errors(), _terminate_as_interrupt(), resources.as_file(default_study()) as study:
+    with _user_errors(), _terminate_as_interrupt(), \
+            resources.as_file(default_study(model)) as study:
         archive = run_sweep(study, out_dir, workers=workers, scheduler=scheduler,
                             command=command)
         counts, not_ok = _not_ok(archive)

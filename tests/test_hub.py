@@ -27,7 +27,7 @@ from studies.parameters import ParameterError
 def table1(tmp_path_factory):
     out = tmp_path_factory.mktemp("table1")
     study = out / "study.toml"
-    study.write_text(default_study().read_text())
+    study.write_text(default_study("hub").read_text())
     archive = run_sweep(study, out / "run", workers=2, progress=False)
     ds = xr.open_dataset(archive)
     yield ds, out / "run"

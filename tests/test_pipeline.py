@@ -514,7 +514,7 @@ def test_cli_bad_study_prints_one_error_line(tmp_path):
 
 def test_cli_run_sweeps_and_plots(scheduler, tmp_path, monkeypatch):
     study = write_study(tmp_path / "default.toml", CASES_STUDY)
-    monkeypatch.setattr(cli, "default_study", lambda: study)
+    monkeypatch.setattr(cli, "default_study", lambda model="rotor": study)
     result = CliRunner().invoke(cli.main, ["run", "--out", str(tmp_path / "res"),
                                            "--scheduler", scheduler])
     # one case of four fails: exit status 1, the last line says how many and where to look
@@ -548,7 +548,8 @@ def test_large_sweep_plots_lines_against_first_parameter(sweep_archive, tmp_path
 
 # --- the built-in study -------------------------------------------------------------------------
 
-DEFAULT_STUDY = REPO / "studies" / "default_study.toml"
+DEFAULT_STUDY = REPO / "studies" / "hub_study.toml"
+ROTOR_STUDY = REPO / "studies" / "rotor_study.toml"
 
 
 def test_default_study_is_table_1(tmp_path):
@@ -557,20 +558,23 @@ def test_default_study_is_table_1(tmp_path):
     rows = [(c["bifilar"], c["tuning_order"], c["fuselage_stiffness_scale"])
             for c in doc["cases"]]
     assert rows == [("locked", 3.0, 1.0), ("free", 3.0, 1.0), ("free", 3.3, 1.0),
-                    ("free", 3.0, 0.5)]
+                    ("free", 3.0, 0.5), ("equivalent", 3.0, 1.0)]
+    # the rotor's built-in study is the same table
+    rotor = tomllib.loads(ROTOR_STUDY.read_text())
+    assert rotor["model"] == "rotor" and rotor["cases"] == doc["cases"]
     # Same file on the stand-in model (same parameter names): it validates.
     copy = tmp_path / "default.toml"
-    copy.write_text(DEFAULT_STUDY.read_text().replace('model = "hub"', f'model = "{MODEL}"'))
+    copy.write_text(DEFAULT_STUDY.read_text().replace('model = "hub"', f'model = "{MODEL}"')
+                    .replace('"equivalent"', '"free"'))
     study = load_study(copy)
     assert [c.label for c in study.cases] == ["0: locked", "1: free, 3P", "2: free, 3.3P",
-                                              "3: free, 3P, half fuselage stiffness"]
+                                              "3: free, 3P, half fuselage stiffness",
+                                              "4: equivalent, 3P"]
 
 
-@pytest.mark.skipif(importlib.util.find_spec("studies.hub") is None,
-                    reason="the hub model (studies/hub.py) is not written yet")
-def test_default_study_validates_on_the_hub_model():
-    study = load_study(DEFAULT_STUDY)
-    assert len(study.cases) == 4
+def test_built_in_studies_validate_on_their_models():
+    assert len(load_study(DEFAULT_STUDY).cases) == 5
+    assert len(load_study(ROTOR_STUDY).cases) == 5
 
 
 # --- outputs declared once: every registered model sweeps end to end ---------------------------

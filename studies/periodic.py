@@ -1,0 +1,109 @@
+"""March a rotor model revolution by revolution until its response is periodic, then record.
+
+A rotor in steady flight has a periodic response once its transients (the slow lag mode, the
+bifilars' free swing, the fuselage modes) have decayed. The runs march whole revolutions and
+compare the per-rev harmonics of chosen signals between successive revolutions; when the
+largest change, relative to each signal's largest harmonic, is within the tolerance, the next
+``revolutions`` whole revolutions are recorded (paper: "the simulations were run for several
+main rotor revolutions until a periodic solution was reached").
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from studies.progress import report
+
+Array = NDArray[np.float64]
+
+
+def rev_harmonics(block: Array, n_max: int = 8) -> NDArray[np.complex128]:
+    """Complex per-rev harmonics 0..n_max of the columns of one revolution of samples."""
+    f = np.fft.rfft(block, axis=0) / block.shape[0]
+    return f[: n_max + 1]
+
+
+def harmonic_change(cur: NDArray[np.complex128], prev: NDArray[np.complex128]) -> float:
+    """Largest change of a harmonic between two revolutions, per signal relative to that
+    signal's largest harmonic; all-zero signals (locked pins) are skipped."""
+    scale = np.abs(cur).max(axis=0)
+    live = scale > 0
+    if not np.any(live):
+        return 0.0
+    return float(np.max(np.abs(cur - prev)[:, live] / scale[live]))
+
+
+@dataclass
+class PeriodicRecord:
+    """Whole revolutions of samples once periodic.
+
+    ``samples`` (revolutions × steps_per_rev, columns of the sampler) with time in column 0;
+    ``transient`` the revolutions marched before recording; ``change`` the last periodicity
+    change.
+    """
+
+    samples: Array
+    transient: int
+    change: float
+
+
+def march(step: Callable[[], None], sample: Callable[[], Array],
+          signals: Callable[[Array], Array], *, steps_per_rev: int, revolutions: int,
+          max_revolutions: int, tolerance: float, min_revolutions: int = 2,
+          hint: str = "raise max_revolutions") -> PeriodicRecord:
+    """March until periodic, then record ``revolutions`` whole revolutions.
+
+    Parameters
+    ----------
+    step
+        Advances the model by one time step (raises on failure).
+    sample
+        The sampled row at the current state (time in s first).
+    signals
+        Maps one revolution of rows (steps_per_rev × columns) to the columns whose harmonics
+        decide periodicity (e.g. hub motion in the rotating frame, pin angles).
+    steps_per_rev, revolutions, max_revolutions, tolerance
+        Steps per revolution; revolutions recorded; revolutions allowed for the transient;
+        largest relative harmonic change between successive revolutions that counts as
+        periodic.
+    min_revolutions
+        Revolutions marched at least before periodicity is tested.
+    hint
+        Advice appended to the error when the response is not periodic in time.
+
+    Raises
+    ------
+    RuntimeError
+        If the response is not periodic after ``max_revolutions``.
+    """
+    def advance(n: int) -> Array:  # n steps, each sampled after it
+        rows = []
+        for _ in range(n):
+            step()
+            rows.append(sample())
+        return np.array(rows)
+
+    prev = None
+    change = float("inf")
+    rev = 0
+    while True:
+        block = advance(steps_per_rev)
+        rev += 1
+        cur = rev_harmonics(signals(block))
+        if prev is not None:
+            change = harmonic_change(cur, prev)
+            done = rev >= min_revolutions and change <= tolerance
+            report(f"revolution {rev} of at most {max_revolutions}: periodicity change "
+                   f"{change:.2e}, tolerance {tolerance:g}" + (" (periodic: recording)"
+                                                                 if done else ""))
+            if done:
+                break
+        prev = cur
+        if rev >= max_revolutions:
+            raise RuntimeError(f"response not periodic after {max_revolutions} revolutions "
+                               f"(last change {change:.2e} > tolerance {tolerance:g}); {hint}")
+    return PeriodicRecord(advance(steps_per_rev * revolutions), rev, change)

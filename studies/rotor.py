@@ -1,0 +1,521 @@
+"""The UH-60 rotor with four hub-mounted bifilars on a fuselage-beam (paper Fig. 13, Table 1).
+
+The model, built from solver parts:
+
+* fuselage-beam — a non-rotating geometrically exact beam clamped to the ground, along +z from
+  z = −``fuselage_length`` to the hub centre (cubic elements); uniform, uncoupled section with
+  bending stiffness EI (both planes) scaled by ``fuselage_stiffness_scale`` (paper case 3
+  halves EI33); its section axes are d1 = z (up), d2 = x (aft), d3 = y, so the root bending
+  moments about d2 and d3 are the paper's M11 (about the fuselage x axis) and M22 (about y).
+  A shaft head of mass ``shaft_mass`` is welded to its top; an in-plane damper at the top
+  gives its first in-plane mode the damping ratio ``fuselage_damping_ratio`` (the paper
+  states none; without it the fuselage transient never decays).
+* hub — a rigid body spinning at Ω on the shaft head (driven revolute about the shaft axis:
+  ψ = Ωt, counter-clockwise seen from above, as the UH-60A; ψ = 0 aft, along +x).
+* four UH-60A blades (:mod:`studies.uh60a`: Yeo's section properties with the Davis cuff,
+  structural twist), each ``blade_elements`` cubic beam elements from the hinge to the tip,
+  at ψ_k = ψ + kπ/2; coincident flap (about the chordwise axis) and lag (about the shaft axis)
+  revolutes at the hinge radius e = 0.381 m joined by massless links, then the pitch bearing,
+  a revolute about the span axis driven by the swashplate: θ_k = θ0 + θc cos ψ_k + θs sin ψ_k
+  (no swashplate phase, no pitch-link flexibility, no δ3). The collective is measured in the
+  twist reference of the Dymore deck (aero twist zero at 0.69R), the one consistent with a
+  loaded rotor (``../shared/notes/next_wave.md`` §6). A linear rotational lag damper on each
+  lag hinge (GenHel's 1500 lb·s/ft stroke damper in rotational form, 1.07 kN·m·s/rad); no lag
+  spring (the fan plot's free hinge).
+* aerodynamics — a :class:`~solver.lifting_line.LiftingLine` on each blade (Peters
+  finite-state sections: lift slope 5.73 /rad, c_d0 0.008, the deck's chord and aero twist,
+  tip loss 0.95R) and one Peters–He :class:`~solver.inflow.DynamicInflow` (``inflow_harmonics``)
+  in forward flight at ``flight_speed`` with the shaft tilted forward by ``shaft_tilt``.
+* four bifilars (:func:`studies.bifilar.add_bifilar`) on the hub at 45° from the blades:
+  ``free``, ``locked`` (paper case 0) or ``equivalent`` (the linear fixed-frame absorber of
+  :mod:`studies.equivalent` on the shaft head in their place).
+
+No gravity (the paper's example has none). The run marches whole revolutions until the
+harmonics of the hub motion and the pin angles repeat (:mod:`studies.periodic`), then records
+``revolutions`` revolutions. The lag mode (0.27/rev, about 4 % damping) is the slowest
+transient: the first ``settle_revolutions`` revolutions run with the lag dampers and the pin
+dampers multiplied by ``settle_damping_factor`` and then continue, from that state, with the
+nominal ones.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from solver.air import FlightCondition
+from solver.beams import Beam, SectionProbe, straight_beam
+from solver.bodies import RigidBody, ground
+from solver.forces import RelativeRotation, Spring
+from solver.inflow import DynamicInflow
+from solver.integrators import make_integrator
+from solver.joints import Revolute, Rigid
+from solver.lifting_line import LiftingLine
+from solver.model import Model
+from solver.sections import isotropic_section
+from solver.system import System
+from solver.timefunctions import TimeFunction, linear
+from studies.bifilar import HARDWARE, BifilarParts, add_bifilar, pin_angle
+from studies.holes import Geometry, Holes, design
+from studies.hub import pin_damping
+from studies.parameters import ModelSpec, Output, Param, ParameterError
+from studies.periodic import march
+from studies.progress import report
+from studies.uh60a import (
+    UH60A,
+    blade_airstations,
+    blade_chord,
+    blade_sections,
+    blade_twist,
+    section_origin,
+)
+
+Z = np.array([0.0, 0.0, 1.0])
+N_BLADES = 4
+N_BIFILARS = 4
+FT = 0.3048  # m
+NEWTON_TOL = 1e-10  # relative Newton tolerance on q (m)
+
+PARAMETERS: dict[str, Param] = {
+    "bifilar": Param("free", "1", "bifilar tuning masses free, locked to the hub, or replaced "
+                     "by their linear fixed-frame equivalent",
+                     choices=("free", "locked", "equivalent")),
+    "tuning_order": HARDWARE["tuning_order"],
+    "hole": HARDWARE["hole"],
+    "hub_speed": HARDWARE["hub_speed"],
+    **{name: HARDWARE[name] for name in ("arm_radius", "cm_offset", "tuning_mass", "pin_mass",
+                                         "pin_diameter", "pin_inertia")},
+    "pin_damping_ratio": Param(0.01, "1", "pendulum damping ratio from rolling resistance",
+                               minimum=0.0, maximum=0.5),
+    "collective": Param(10.7, "degree", "collective pitch θ0 (deck twist reference, ≈ 0.7R)",
+                        minimum=-5.0, maximum=20.0),
+    "cyclic_sine": Param(-4.9, "degree", "longitudinal cyclic θs (on sin ψ)", minimum=-15.0,
+                         maximum=15.0),
+    "cyclic_cosine": Param(4.7, "degree", "lateral cyclic θc (on cos ψ)", minimum=-15.0,
+                           maximum=15.0),
+    "flight_speed": Param(150 * FT, "m s-1", "forward flight speed U (150 ft/s)", minimum=0.0,
+                          maximum=100.0),
+    "shaft_tilt": Param(3.0, "degree", "forward shaft tilt (free stream blowing down through "
+                        "the disk)", minimum=-15.0, maximum=15.0),
+    "air_density": Param(1.225, "kg m-3", "air density", minimum=0.1, maximum=2.0),
+    "blade_elements": Param(6, "1", "cubic beam elements per blade, hinge to tip", minimum=2,
+                            maximum=20),
+    "lag_damping": Param(UH60A.lag_damping, "N m s rad-1", "linear lag damper, rotational",
+                         minimum=0.0, maximum=1e6),
+    "wake_states": Param(4, "1", "Peters finite-state wake states per airfoil section",
+                         minimum=0, maximum=10),
+    "aero_points": Param(2, "1", "aerodynamic sections (Gauss points) per blade element",
+                         minimum=1, maximum=8),
+    "inflow_harmonics": Param(2, "1", "highest harmonic M of the Peters–He inflow (power P = "
+                              "M + 1)", minimum=1, maximum=8),
+    "hub_mass": Param(250.0, "kg", "hub mass (the rotor's 716 kg less 4 blades)",
+                      minimum=1.0, maximum=1e4),
+    "hub_tilt_inertia": Param(50.0, "kg m2", "hub moment of inertia about in-plane axes",
+                              minimum=0.1, maximum=1e4),
+    "shaft_mass": Param(300.0, "kg", "mass of the shaft head on the fuselage-beam",
+                        minimum=1.0, maximum=1e5),
+    "fuselage_length": Param(2.0, "m", "fuselage-beam length, ground clamp to hub centre",
+                             minimum=0.2, maximum=20.0),
+    "fuselage_bending_stiffness": Param(1.56e7, "N m2", "nominal fuselage-beam bending "
+                                        "stiffness EI (both planes)", minimum=1e3,
+                                        maximum=1e12),
+    "fuselage_stiffness_scale": Param(1.0, "1", "scale on the fuselage-beam bending stiffness",
+                                      minimum=0.01, maximum=100.0),
+    "fuselage_damping_ratio": Param(0.02, "1", "damping ratio of the nominal in-plane fuselage "
+                                    "mode", minimum=0.0, maximum=1.0),
+    "scheme": Param("ed", "1", "time integration scheme", choices=("ed", "galpha", "ep")),
+    "steps_per_rev": Param(180, "1", "time steps per revolution", minimum=64, maximum=20000),
+    "revolutions": Param(1, "1", "whole revolutions recorded once periodic", minimum=1,
+                         maximum=50),
+    "settle_revolutions": Param(6, "1", "revolutions with augmented lag and pin damping "
+                                "before the nominal run", minimum=0, maximum=200),
+    "settle_damping_factor": Param(10.0, "1", "factor on the lag and pin dampers while "
+                                   "settling", minimum=1.0, maximum=1000.0),
+    "max_revolutions": Param(40, "1", "revolutions allowed to reach a periodic response "
+                             "after settling", minimum=2, maximum=2000),
+    "periodic_tolerance": Param(2e-3, "1", "max change of harmonics between successive "
+                                "revolutions, relative to the largest", minimum=0.0,
+                                exclusive_minimum=True, maximum=1.0),
+}
+
+# Nominal fuselage-beam section other than bending: axial, shear and torsion stiff (vertical
+# and yaw modes far above 4P), light (the paper's fuselage-beam has no inertia: "fuselage
+# inertia properties were not taken into account").
+FUSELAGE_EA = 2.0e9  # N
+FUSELAGE_GA = 1.0e9  # N
+FUSELAGE_GJ = 2.0e7  # N m2
+FUSELAGE_MASS = 10.0  # kg/m
+FUSELAGE_ELEMENTS = 2
+
+OUTPUTS: dict[str, Output] = {
+    "time": Output("s", "time", dims=("time",)),
+    "bifilar": Output("1", "bifilar absorber number (0 and 2 are opposite)", dims=("bifilar",)),
+    "hub_x_fixed": Output("m", "hub in-plane displacement x, fixed frame", history=True),
+    "hub_y_fixed": Output("m", "hub in-plane displacement y, fixed frame", history=True),
+    "hub_x_rotating": Output("m", "hub in-plane displacement along the rotating x axis"),
+    "hub_y_rotating": Output("m", "hub in-plane displacement along the rotating y axis"),
+    "hub_force_x_fixed": Output("N", "in-plane force transmitted to the fuselage-beam, x",
+                                history=True, figure="hub_force_history"),
+    "hub_force_y_fixed": Output("N", "in-plane force transmitted to the fuselage-beam, y",
+                                history=True, figure="hub_force_history"),
+    "hub_force_z_fixed": Output("N", "vertical force transmitted to the fuselage-beam",
+                                history=True, harmonics=True),
+    "fuselage_moment_x_fixed": Output("N m", "fuselage-beam root bending moment about x (M11)",
+                                      history=True, figure="fuselage_moments"),
+    "fuselage_moment_y_fixed": Output("N m", "fuselage-beam root bending moment about y (M22)",
+                                      history=True, figure="fuselage_moments"),
+    "bifilar_cm_x_fixed": Output("m", "centre of mass of the 4 tuning masses, x", history=True),
+    "bifilar_cm_y_fixed": Output("m", "centre of mass of the 4 tuning masses, y", history=True),
+    "pin_angle": Output("degree", "pin angle of each bifilar", dims=("bifilar", "time"),
+                        history=True, harmonics=True, figure="pin_angles"),
+    "thrust": Output("N", "rotor thrust (aerodynamic, along the shaft)", history=True,
+                     harmonics=True),
+    "mean_inflow": Output("1", "mean induced inflow ratio λ0 of the Peters–He states",
+                          history=True),
+    "blade_root_shear_flap": Output("N", "blade 0 root shear, flapwise (section d3)",
+                                    history=True, harmonics=True),
+    "blade_root_shear_lag": Output("N", "blade 0 root shear, chordwise (section d2)",
+                                   history=True, harmonics=True),
+    "blade_root_axial": Output("N", "blade 0 root axial force", history=True, harmonics=True),
+    "blade_root_torsion": Output("N m", "blade 0 root torsion (pitch-link moment)",
+                                 history=True, harmonics=True),
+    "hub_displacement_rotating": Output(
+        "m", "hub in-plane displacement in the rotating frame",
+        components=("hub_x_rotating", "hub_y_rotating")),
+    "hub_displacement_fixed": Output(
+        "m", "hub in-plane displacement in the fixed frame",
+        components=("hub_x_fixed", "hub_y_fixed"), figure="orbits"),
+    "hub_force_fixed": Output(
+        "N", "in-plane hub force transmitted to the fuselage-beam, fixed frame",
+        components=("hub_force_x_fixed", "hub_force_y_fixed")),
+    "fuselage_moment_fixed": Output(
+        "N m", "fuselage-beam root bending moments (M11, M22), fixed frame",
+        components=("fuselage_moment_x_fixed", "fuselage_moment_y_fixed")),
+    "bifilar_cm_displacement": Output(
+        "m", "displacement of the centre of mass of the bifilar tuning masses, fixed frame",
+        components=("bifilar_cm_x_fixed", "bifilar_cm_y_fixed"), figure="orbits"),
+}
+
+
+def _geometry(p: dict[str, Any]) -> Geometry:
+    return Geometry(p["arm_radius"], p["cm_offset"], p["pin_diameter"], p["tuning_mass"],
+                    p["pin_mass"], p["pin_inertia"])
+
+
+def swashplate(theta0: float, theta_c: float, theta_s: float, omega: float,
+               azimuth: float) -> TimeFunction:
+    """Blade pitch θ(t) = θ0 + θc cos ψ + θs sin ψ, ψ = Ωt + ``azimuth`` (rad, rad/s)."""
+    def value(t: float) -> float:
+        psi = omega * t + azimuth
+        return theta0 + theta_c * math.cos(psi) + theta_s * math.sin(psi)
+
+    def rate(t: float) -> float:
+        psi = omega * t + azimuth
+        return omega * (-theta_c * math.sin(psi) + theta_s * math.cos(psi))
+
+    def accel(t: float) -> float:
+        psi = omega * t + azimuth
+        return -omega * omega * (theta_c * math.cos(psi) + theta_s * math.sin(psi))
+
+    return TimeFunction(value, rate, accel)
+
+
+def _shifted(f: TimeFunction) -> TimeFunction:
+    """f(t) − f(0): a driven revolute's angle counts from the built configuration."""
+    f0 = f.value(0.0)
+    return TimeFunction(lambda t: f.value(t) - f0, f.rate, f.accel)
+
+
+@dataclass
+class RotorParts:
+    """Handles of the built model for the outputs."""
+
+    hub: RigidBody
+    shaft: RigidBody
+    fuselage: Beam
+    blades: list[Beam]
+    lines: list[LiftingLine]
+    inflow: DynamicInflow
+    bifilars: list[BifilarParts]
+    equivalent: Any
+    holes: Holes
+    fuselage_stiffness: float
+    fuselage_damping: float
+    lag_dampers: list[RelativeRotation]
+
+
+def build(p: dict[str, Any], damping_factor: float = 1.0) -> tuple[Model, RotorParts]:
+    """The rotor model for complete parameters ``p``; ``damping_factor`` multiplies the lag
+    and pin dampers (settling phase)."""
+    omega = p["hub_speed"]
+    holes = design(p["hole"], _geometry(p), tuning_order=p["tuning_order"])
+    g0 = ground()
+    model = Model()
+    # ---- fuselage-beam and shaft head (non-rotating)
+    length = p["fuselage_length"]
+    ei = p["fuselage_bending_stiffness"] * p["fuselage_stiffness_scale"]
+    section = isotropic_section(EA=FUSELAGE_EA, GA2=FUSELAGE_GA, GA3=FUSELAGE_GA,
+                                GJ=FUSELAGE_GJ, EI2=ei, EI3=ei, mass=FUSELAGE_MASS,
+                                i22=1e-3, i33=1e-3)
+    fus = straight_beam("fuselage", (0.0, 0.0, -length), (0.0, 0.0, 0.0), section,
+                        n_elements=FUSELAGE_ELEMENTS, e3=(0.0, 1.0, 0.0))
+    shaft = RigidBody("shaft", p["shaft_mass"], inertia=(10.0, 10.0, 10.0))
+    # the rotor's in-plane mass on the fuselage for the damper: shaft, hub, bifilars and the
+    # blades' in-plane effective mass above their lag frequency (m − S²/I per hinged blade)
+    m_blade = UH60A.blade_mass - UH60A.blade_first_moment**2 / UH60A.blade_flap_inertia
+    m_bif = N_BIFILARS * (p["tuning_mass"] + 2 * p["pin_mass"])
+    m_top = p["shaft_mass"] + p["hub_mass"] + N_BLADES * m_blade + m_bif
+    k_nom = 3.0 * p["fuselage_bending_stiffness"] / length**3
+    c_fus = 2.0 * p["fuselage_damping_ratio"] * math.sqrt(k_nom * m_top)
+    model.add(g0, fus, shaft,
+              Rigid("fuselage_clamp", g0, fus.root),
+              Rigid("shaft_mount", fus.tip, shaft),
+              Spring("fuselage_damper", None, shaft, stiffness=np.zeros((3, 3)),
+                     damping=np.diag([c_fus, c_fus, 0.0])))
+    # ---- hub
+    hub = RigidBody("hub", p["hub_mass"],
+                    inertia=(p["hub_tilt_inertia"], p["hub_tilt_inertia"], 1.0),
+                    angular_velocity=omega * Z)
+    # (polar inertia: the speed is prescribed, so it only sets the driving torque; a unit
+    # value, as in studies.hub, keeps the driven rotation well conditioned)
+    model.add(hub, Revolute("rotor", shaft, hub, axis=Z, driven=linear(omega)))
+    # ---- blades
+    e = section_origin(include_cuff=True)
+    r_tw, tw_s = blade_twist("structural")
+    r_ta, tw_a = blade_twist("aero")
+    r_c, chord = blade_chord()
+    r_as, _ = blade_airstations()
+    flight = FlightCondition(p["flight_speed"], math.radians(p["shaft_tilt"]),
+                             p["air_density"])
+    m = p["inflow_harmonics"]
+    # a first guess of the thrust coefficient starts the inflow near its level
+    inflow = DynamicInflow("inflow", flight, UH60A.radius, omega, model="peters-he",
+                           harmonics=m, power=m + 1, initial_thrust=0.007)
+    model.add(inflow)
+    th0, thc, ths = (math.radians(p[k]) for k in ("collective", "cyclic_cosine", "cyclic_sine"))
+    blades, lines, dampers = [], [], []
+    for k in range(N_BLADES):
+        psi = k * math.pi / 2
+        er = np.array([math.cos(psi), math.sin(psi), 0.0])
+        et = np.array([-math.sin(psi), math.cos(psi), 0.0])
+        hinge = e * er
+        pitch = swashplate(th0, thc, ths, omega, psi)
+        theta_start = pitch.value(0.0)
+
+        def twist(s, theta_start=theta_start):
+            return np.interp(np.asarray(s) + e, r_tw, tw_s) + theta_start
+
+        blade = straight_beam(f"blade{k}", hinge, UH60A.radius * er, blade_sections(),
+                              n_elements=p["blade_elements"], e3=Z, twist=twist,
+                              angular_velocity=omega * Z)
+        spin = {"velocity": np.cross(omega * Z, hinge), "angular_velocity": omega * Z}
+        flap_link = RigidBody(f"flap_link{k}", 0.0, position=hinge, **spin)
+        lag_link = RigidBody(f"lag_link{k}", 0.0, position=hinge, **spin)
+        damper = RelativeRotation(f"lag_damper{k}", flap_link, lag_link, axis=Z,
+                                  damping=p["lag_damping"] * damping_factor)
+
+        def aero_pitch(s):  # the chord line's angle from the beam's section frame
+            r = np.asarray(s) + e
+            return np.interp(r, r_ta, tw_a) - np.interp(r, r_tw, tw_s)
+
+        line = LiftingLine(f"airloads{k}", blade, flight,
+                           chord=lambda s: np.interp(np.asarray(s) + e, r_c, chord),
+                           span=(r_as[0] - e, UH60A.radius - e), lift_slope=UH60A.lift_slope,
+                           drag=UH60A.cd0, pitch=aero_pitch,
+                           lift_end=UH60A.tip_loss * UH60A.radius - e,
+                           wake_states=p["wake_states"], inflow=inflow,
+                           points=p["aero_points"])
+        model.add(flap_link, lag_link, blade, line,
+                  Revolute(f"flap{k}", hub, flap_link, point=hinge, axis=et),
+                  Revolute(f"lag{k}", flap_link, lag_link, point=hinge, axis=Z),
+                  Revolute(f"pitch{k}", lag_link, blade.root, point=hinge, axis=er,
+                           driven=_shifted(pitch)))
+        if p["lag_damping"] > 0:
+            model.add(damper)
+        blades.append(blade)
+        lines.append(line)
+        dampers.append(damper)
+    # ---- bifilars
+    parts: list[BifilarParts] = []
+    equivalent = None
+    if p["bifilar"] == "equivalent":
+        from studies.equivalent import add_equivalent, equivalent_absorber
+
+        absorber = equivalent_absorber(holes, N_BIFILARS,
+                                       pin_damping(p, holes) * damping_factor)
+        equivalent = add_equivalent(model, shaft, hub, np.zeros(3), absorber, omega)
+    else:
+        locked = p["bifilar"] == "locked"
+        cp = 0.0 if locked else pin_damping(p, holes) * damping_factor
+        for i in range(N_BIFILARS):
+            parts.append(add_bifilar(model, hub, holes, 0.0, angle=np.pi / 4 + i * np.pi / 2,
+                                     prefix=f"b{i}_", omega=omega, locked=locked,
+                                     pin_damping=cp))
+    return model, RotorParts(hub, shaft, fus, blades, lines, inflow, parts, equivalent, holes,
+                             k_nom * p["fuselage_stiffness_scale"], c_fus, dampers)
+
+
+def _line_set(system: System, line: LiftingLine):
+    return next(s for s in system.sets if line in s.elements)
+
+
+class _Sampler:
+    """One row of outputs at the integrator's current state (fixed column layout)."""
+
+    COLUMNS = ("t", "x", "y", "fx", "fy", "fz", "m11", "m22", "cmx", "cmy", "thrust", "lam0",
+               "v3", "v2", "n1", "t1")
+
+    def __init__(self, system: System, parts: RotorParts) -> None:
+        self.s = system
+        self.parts = parts
+        self.line_set = _line_set(system, parts.lines[0])
+        self.root = SectionProbe(parts.fuselage, [0.0, parts.fuselage.length])
+        self.blade_root = SectionProbe(parts.blades[0], [0.0])
+        self.o_shaft = system.offset[parts.shaft]
+        self.o_inflow = system.offset[parts.inflow]
+        self.mass_off = [system.offset[b.mass] for b in parts.bifilars]
+        self.o_top = system.offset[parts.fuselage.tip]
+
+    def __call__(self, integ) -> np.ndarray:
+        s, q, v, parts = self.s, integ.q, integ.v, self.parts
+        x = q[self.o_shaft : self.o_shaft + 3]
+        loads = self.root(s, q)  # (2, 6): root and top, section frame d1 = z, d2 = x, d3 = y
+        # force the top section passes down the fuselage-beam, from material to fixed axes
+        d = q[self.o_top + 3 : self.o_top + 12].reshape(3, 3)  # rows: d1, d2, d3
+        f_top = loads[1, :3] @ d
+        m11, m22 = loads[0, 4], loads[0, 5]
+        if parts.bifilars:
+            cm = np.mean([q[o : o + 3] for o in self.mass_off], axis=0)
+            phis = [0.0 if b.locked else pin_angle(s, b, parts.hub, q) for b in parts.bifilars]
+        else:
+            from studies.equivalent import equivalent_cm, equivalent_pin_angles
+
+            cm = equivalent_cm(s, parts.equivalent, q, integ.t)
+            phis = equivalent_pin_angles(s, parts.equivalent, q, integ.t)
+        acc = getattr(integ, "qdd", None)
+        air = self.line_set.airloads(q, v, np.zeros_like(q) if acc is None else acc)
+        thrust = float(np.sum(air["force"][:, 2] * air["ds"]))
+        lam0 = parts.inflow.mean_inflow(q[self.o_inflow : self.o_inflow
+                                          + parts.inflow.n_states])
+        br = self.blade_root(s, q)[0]
+        return np.array([integ.t, x[0], x[1], f_top[0], f_top[1], f_top[2], m11, m22,
+                         cm[0], cm[1], thrust, lam0, br[2], br[1], br[0], br[3],
+                         *np.degrees(phis)])
+
+
+def _stepper(integ, omega: float):
+    """One time step of ``integ``; raises RuntimeError with the time and revolution if Newton
+    fails."""
+    def step() -> None:
+        info = integ.step()
+        if not info.converged:
+            raise RuntimeError(f"time step failed at t = {integ.t:.6g} s (revolution "
+                               f"{integ.t * omega / (2 * np.pi):.2f}): {info.message}")
+    return step
+
+
+def _settle(p: dict[str, Any], h: float) -> tuple[dict[str, Any], int, int]:
+    """March ``settle_revolutions`` with the lag and pin dampers multiplied by
+    ``settle_damping_factor``; returns (integrator state to continue from, steps, Newton
+    iterations)."""
+    model, _ = build(p, damping_factor=p["settle_damping_factor"])
+    integ = make_integrator(System(model), p["scheme"], h, tol=NEWTON_TOL)
+    step = _stepper(integ, p["hub_speed"])
+    for rev in range(p["settle_revolutions"]):
+        for _ in range(p["steps_per_rev"]):
+            step()
+        report(f"settling revolution {rev + 1} of {p['settle_revolutions']} (lag and pin "
+               f"dampers × {p['settle_damping_factor']:g})")
+    return integ.state(), integ.n_steps, integ.n_iterations
+
+
+def run(params: dict[str, Any]) -> xr.Dataset:
+    """Settle, march until periodic, record whole revolutions (see the module docstring)."""
+    p = SPEC.complete(params)
+    omega = p["hub_speed"]
+    nrev = p["steps_per_rev"]
+    h = 2 * np.pi / omega / nrev
+    t0 = time.perf_counter()
+    steps = iterations = 0
+    settled = None
+    if p["settle_revolutions"] and p["settle_damping_factor"] != 1.0:
+        settled, steps, iterations = _settle(p, h)
+    model, parts = build(p)
+    system = System(model)
+    integ = make_integrator(system, p["scheme"], h, tol=NEWTON_TOL)
+    if settled is not None:  # the same model with nominal dampers: continue exactly
+        integ.restore(settled)
+    sampler = _Sampler(system, parts)
+
+    def signals(block: np.ndarray) -> np.ndarray:
+        # periodicity of the hub motion in the rotating frame, the hub forces and the pins
+        psi = omega * block[:, 0]
+        xr_ = np.cos(psi) * block[:, 1] + np.sin(psi) * block[:, 2]
+        yr_ = -np.sin(psi) * block[:, 1] + np.cos(psi) * block[:, 2]
+        return np.column_stack([xr_, yr_, block[:, 3:5], block[:, len(_Sampler.COLUMNS):]])
+
+    rec = march(_stepper(integ, omega), lambda: sampler(integ), signals, steps_per_rev=nrev,
+                revolutions=p["revolutions"], max_revolutions=p["max_revolutions"],
+                tolerance=p["periodic_tolerance"],
+                hint="raise max_revolutions, settle_revolutions or pin_damping_ratio")
+    steps += integ.n_steps
+    iterations += integ.n_iterations
+    data = rec.samples
+    t = data[:, 0]
+    psi = omega * t
+    cs, sn = np.cos(psi), np.sin(psi)
+    col = {name: data[:, i] for i, name in enumerate(_Sampler.COLUMNS)}
+    thrust = float(col["thrust"].mean())
+    disk = math.pi * UH60A.radius**2
+    ct = thrust / (p["air_density"] * disk * (omega * UH60A.radius) ** 2)
+    ds = SPEC.dataset({
+        "time": t,
+        "bifilar": np.arange(N_BIFILARS),
+        "hub_x_fixed": col["x"],
+        "hub_y_fixed": col["y"],
+        "hub_x_rotating": cs * col["x"] + sn * col["y"],
+        "hub_y_rotating": -sn * col["x"] + cs * col["y"],
+        "hub_force_x_fixed": col["fx"],
+        "hub_force_y_fixed": col["fy"],
+        "hub_force_z_fixed": col["fz"],
+        "fuselage_moment_x_fixed": col["m11"],
+        "fuselage_moment_y_fixed": col["m22"],
+        "bifilar_cm_x_fixed": col["cmx"],
+        "bifilar_cm_y_fixed": col["cmy"],
+        "pin_angle": data[:, len(_Sampler.COLUMNS):].T,
+        "thrust": col["thrust"],
+        "mean_inflow": col["lam0"],
+        "blade_root_shear_flap": col["v3"],
+        "blade_root_shear_lag": col["v2"],
+        "blade_root_axial": col["n1"],
+        "blade_root_torsion": col["t1"],
+    })
+    ds.attrs.update(hub_speed=float(omega), revolutions=int(p["revolutions"]),
+                    samples_per_rev=int(nrev), transient_revolutions=int(
+                        rec.transient + p["settle_revolutions"]),
+                    periodicity_change=float(rec.change),
+                    tuning_order_linear=float(parts.holes.order_linear),
+                    thrust_coefficient=ct, thrust_coefficient_over_solidity=ct / UH60A.solidity,
+                    advance_ratio=p["flight_speed"] / (omega * UH60A.radius),
+                    fuselage_stiffness=float(parts.fuselage_stiffness),
+                    fuselage_damping=float(parts.fuselage_damping),
+                    solver_seconds=time.perf_counter() - t0, steps=int(steps),
+                    newton_iterations=int(iterations), unknowns=int(system.n))
+    return ds
+
+
+def _check(p: dict[str, Any]) -> None:
+    if p["revolutions"] > p["max_revolutions"]:
+        raise ParameterError("revolutions must not exceed max_revolutions")
+    design(p["hole"], _geometry(p), tuning_order=p["tuning_order"])
+
+
+SPEC = ModelSpec("rotor", PARAMETERS, run, _check,
+                 description="four-bladed elastic UH-60 rotor with aerodynamics and four "
+                             "bifilars on a fuselage-beam",
+                 outputs=OUTPUTS)
