@@ -249,6 +249,66 @@ class RotorParts:
     lag_dampers: list[RelativeRotation]
 
 
+def add_blade(model: Model, hub, k: int, p: dict[str, Any],
+              damping_factor: float = 1.0) -> tuple[Beam, RelativeRotation]:
+    """Blade ``k`` (azimuth kπ/2 at t = 0) on ``hub`` (a body spinning at ``hub_speed`` about
+    +z, frame = identity at t = 0): flap, lag and driven pitch revolutes at the hinge, joined
+    by massless links, and the lag damper (× ``damping_factor``). Returns (beam, damper)."""
+    omega = p["hub_speed"]
+    e = section_origin(include_cuff=True)
+    r_tw, tw_s = blade_twist("structural")
+    psi = k * math.pi / 2
+    er = np.array([math.cos(psi), math.sin(psi), 0.0])
+    et = np.array([-math.sin(psi), math.cos(psi), 0.0])
+    hinge = e * er
+    pitch = swashplate(*(math.radians(p[n]) for n in ("collective", "cyclic_cosine",
+                                                       "cyclic_sine")), omega, psi)
+    theta_start = pitch.value(0.0)
+
+    def twist(s):  # structural twist, the blade built at its pitch at t = 0
+        return np.interp(np.asarray(s) + e, r_tw, tw_s) + theta_start
+
+    blade = straight_beam(f"blade{k}", hinge, UH60A.radius * er, blade_sections(),
+                          n_elements=p["blade_elements"], e3=Z, twist=twist,
+                          angular_velocity=omega * Z)
+    spin = {"velocity": np.cross(omega * Z, hinge), "angular_velocity": omega * Z}
+    flap_link = RigidBody(f"flap_link{k}", 0.0, position=hinge, **spin)
+    lag_link = RigidBody(f"lag_link{k}", 0.0, position=hinge, **spin)
+    damper = RelativeRotation(f"lag_damper{k}", flap_link, lag_link, axis=Z,
+                              damping=p["lag_damping"] * damping_factor)
+    model.add(flap_link, lag_link, blade,
+              Revolute(f"flap{k}", hub, flap_link, point=hinge, axis=et),
+              Revolute(f"lag{k}", flap_link, lag_link, point=hinge, axis=Z),
+              Revolute(f"pitch{k}", lag_link, blade.root, point=hinge, axis=er,
+                       driven=_shifted(pitch)))
+    if p["lag_damping"] > 0:
+        model.add(damper)
+    return blade, damper
+
+
+def airloads(blade: Beam, k: int, p: dict[str, Any], flight: FlightCondition,
+             inflow: DynamicInflow | None) -> LiftingLine:
+    """The lifting line of blade ``k``: the deck's chord and aero twist (relative to the
+    beam's structural twist), lift slope, profile drag, tip loss, from the first airstation
+    to the tip."""
+    e = section_origin(include_cuff=True)
+    r_tw, tw_s = blade_twist("structural")
+    r_ta, tw_a = blade_twist("aero")
+    r_c, chord = blade_chord()
+    r_as, _ = blade_airstations()
+
+    def aero_pitch(s):  # the chord line's angle from the beam's section frame
+        r = np.asarray(s) + e
+        return np.interp(r, r_ta, tw_a) - np.interp(r, r_tw, tw_s)
+
+    return LiftingLine(f"airloads{k}", blade, flight,
+                       chord=lambda s: np.interp(np.asarray(s) + e, r_c, chord),
+                       span=(r_as[0] - e, UH60A.radius - e), lift_slope=UH60A.lift_slope,
+                       drag=UH60A.cd0, pitch=aero_pitch,
+                       lift_end=UH60A.tip_loss * UH60A.radius - e,
+                       wake_states=p["wake_states"], inflow=inflow, points=p["aero_points"])
+
+
 def build(p: dict[str, Any], damping_factor: float = 1.0) -> tuple[Model, RotorParts]:
     """The rotor model for complete parameters ``p``; ``damping_factor`` multiplies the lag
     and pin dampers (settling phase)."""
@@ -284,12 +344,7 @@ def build(p: dict[str, Any], damping_factor: float = 1.0) -> tuple[Model, RotorP
     # (polar inertia: the speed is prescribed, so it only sets the driving torque; a unit
     # value, as in studies.hub, keeps the driven rotation well conditioned)
     model.add(hub, Revolute("rotor", shaft, hub, axis=Z, driven=linear(omega)))
-    # ---- blades
-    e = section_origin(include_cuff=True)
-    r_tw, tw_s = blade_twist("structural")
-    r_ta, tw_a = blade_twist("aero")
-    r_c, chord = blade_chord()
-    r_as, _ = blade_airstations()
+    # ---- blades, aerodynamics
     flight = FlightCondition(p["flight_speed"], math.radians(p["shaft_tilt"]),
                              p["air_density"])
     m = p["inflow_harmonics"]
@@ -297,48 +352,11 @@ def build(p: dict[str, Any], damping_factor: float = 1.0) -> tuple[Model, RotorP
     inflow = DynamicInflow("inflow", flight, UH60A.radius, omega, model="peters-he",
                            harmonics=m, power=m + 1, initial_thrust=0.007)
     model.add(inflow)
-    th0, thc, ths = (math.radians(p[k]) for k in ("collective", "cyclic_cosine", "cyclic_sine"))
     blades, lines, dampers = [], [], []
     for k in range(N_BLADES):
-        psi = k * math.pi / 2
-        er = np.array([math.cos(psi), math.sin(psi), 0.0])
-        et = np.array([-math.sin(psi), math.cos(psi), 0.0])
-        hinge = e * er
-        pitch = swashplate(th0, thc, ths, omega, psi)
-        theta_start = pitch.value(0.0)
-
-        def twist(s, theta_start=theta_start):
-            return np.interp(np.asarray(s) + e, r_tw, tw_s) + theta_start
-
-        blade = straight_beam(f"blade{k}", hinge, UH60A.radius * er, blade_sections(),
-                              n_elements=p["blade_elements"], e3=Z, twist=twist,
-                              angular_velocity=omega * Z)
-        spin = {"velocity": np.cross(omega * Z, hinge), "angular_velocity": omega * Z}
-        flap_link = RigidBody(f"flap_link{k}", 0.0, position=hinge, **spin)
-        lag_link = RigidBody(f"lag_link{k}", 0.0, position=hinge, **spin)
-        damper = RelativeRotation(f"lag_damper{k}", flap_link, lag_link, axis=Z,
-                                  damping=p["lag_damping"] * damping_factor)
-
-        def aero_pitch(s):  # the chord line's angle from the beam's section frame
-            r = np.asarray(s) + e
-            return np.interp(r, r_ta, tw_a) - np.interp(r, r_tw, tw_s)
-
-        line = LiftingLine(f"airloads{k}", blade, flight,
-                           chord=lambda s: np.interp(np.asarray(s) + e, r_c, chord),
-                           span=(r_as[0] - e, UH60A.radius - e), lift_slope=UH60A.lift_slope,
-                           drag=UH60A.cd0, pitch=aero_pitch,
-                           lift_end=UH60A.tip_loss * UH60A.radius - e,
-                           wake_states=p["wake_states"], inflow=inflow,
-                           points=p["aero_points"])
-        model.add(flap_link, lag_link, blade, line,
-                  Revolute(f"flap{k}", hub, flap_link, point=hinge, axis=et),
-                  Revolute(f"lag{k}", flap_link, lag_link, point=hinge, axis=Z),
-                  Revolute(f"pitch{k}", lag_link, blade.root, point=hinge, axis=er,
-                           driven=_shifted(pitch)))
-        if p["lag_damping"] > 0:
-            model.add(damper)
+        blade, damper = add_blade(model, hub, k, p, damping_factor)
+        lines.append(model.add(airloads(blade, k, p, flight, inflow)))
         blades.append(blade)
-        lines.append(line)
         dampers.append(damper)
     # ---- bifilars
     parts: list[BifilarParts] = []

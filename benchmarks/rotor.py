@@ -1,0 +1,84 @@
+"""Rotor benchmark: the UH-60 rotor model (studies/rotor.py) per revolution and per case.
+
+    PYTHONPATH=. python benchmarks/rotor.py --revolutions 2 [--bifilar free] [--profile]
+    PYTHONPATH=. python benchmarks/rotor.py --case [--bifilar free]     # one whole case
+
+The first form builds the model with its defaults (``--steps-per-rev`` to change them), marches
+``--revolutions`` revolutions and prints the unknowns, the set-up time, the wall time per
+revolution, steps per second and Newton iterations per step; ``--profile`` runs the loop under
+pyinstrument and prints the profile (the modules that take the time). The second runs one case
+as the sweep does (settling, marching until periodic, recording) and prints its wall time,
+revolutions and Newton iterations per step.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+
+import numpy as np
+
+from solver.integrators import make_integrator
+from solver.system import System
+from studies.rotor import NEWTON_TOL, SPEC, build, run
+
+
+def per_revolution(p: dict, revolutions: int, profile: bool) -> dict:
+    t0 = time.perf_counter()
+    model, _ = build(p)
+    system = System(model)
+    integ = make_integrator(system, p["scheme"], 2 * np.pi / p["hub_speed"] / p["steps_per_rev"],
+                            tol=NEWTON_TOL)
+    setup = time.perf_counter() - t0
+    profiler = None
+    if profile:
+        from pyinstrument import Profiler
+
+        profiler = Profiler()
+        profiler.start()
+    t1 = time.perf_counter()
+    for _ in range(revolutions * p["steps_per_rev"]):
+        info = integ.step()
+        if not info.converged:
+            raise SystemExit(f"step failed at t = {integ.t:.4g} s: {info.message}")
+    loop = time.perf_counter() - t1
+    if profiler is not None:
+        profiler.stop()
+        print(profiler.output_text(unicode=True, color=False, show_all=False))
+    return {"bifilar": p["bifilar"], "unknowns": system.n, "steps_per_rev": p["steps_per_rev"],
+            "setup_s": round(setup, 2), "seconds_per_rev": round(loop / revolutions, 2),
+            "steps_per_s": round(integ.n_steps / loop, 2),
+            "newton_per_step": round(integ.n_iterations / integ.n_steps, 2)}
+
+
+def per_case(p: dict) -> dict:
+    t0 = time.perf_counter()
+    ds = run(p)
+    wall = time.perf_counter() - t0
+    revs = ds.attrs["transient_revolutions"] + ds.attrs["revolutions"]
+    return {"bifilar": p["bifilar"], "wall_s": round(wall, 1), "revolutions": int(revs),
+            "seconds_per_rev": round(wall / revs, 2),
+            "newton_per_step": round(ds.attrs["newton_iterations"] / ds.attrs["steps"], 2),
+            "thrust_coefficient_over_solidity": round(
+                ds.attrs["thrust_coefficient_over_solidity"], 4)}
+
+
+def main() -> None:
+    a = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    a.add_argument("--revolutions", type=int, default=2)
+    a.add_argument("--bifilar", default="free", choices=["free", "locked", "equivalent"])
+    a.add_argument("--steps-per-rev", type=int, default=None)
+    a.add_argument("--profile", action="store_true")
+    a.add_argument("--case", action="store_true", help="run one whole case")
+    args = a.parse_args()
+    given = {"bifilar": args.bifilar}
+    if args.steps_per_rev:
+        given["steps_per_rev"] = args.steps_per_rev
+    p = SPEC.complete(given)
+    res = per_case(p) if args.case else per_revolution(p, args.revolutions, args.profile)
+    print(json.dumps(res))
+
+
+if __name__ == "__main__":
+    main()
