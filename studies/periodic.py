@@ -10,7 +10,7 @@ main rotor revolutions until a periodic solution was reached").
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -27,14 +27,31 @@ def rev_harmonics(block: Array, n_max: int = 8) -> NDArray[np.complex128]:
     return f[: n_max + 1]
 
 
-def harmonic_change(cur: NDArray[np.complex128], prev: NDArray[np.complex128]) -> float:
-    """Largest change of a harmonic between two revolutions, per signal relative to that
-    signal's largest harmonic; all-zero signals (locked pins) are skipped."""
-    scale = np.abs(cur).max(axis=0)
-    live = scale > 0
-    if not np.any(live):
-        return 0.0
-    return float(np.max(np.abs(cur - prev)[:, live] / scale[live]))
+def harmonic_change(cur: NDArray[np.complex128], prev: NDArray[np.complex128],
+                    groups: Sequence[int] | None = None, separate_mean: bool = False) -> float:
+    """Largest change of a harmonic between two revolutions, relative to a scale.
+
+    The scale of a column is its largest harmonic, or with ``groups`` (``groups[j]`` labels
+    column j) the largest of its group: the x and y of one vector share a scale, so that a
+    component near zero is not held to its own tiny size. With ``separate_mean`` the mean
+    (harmonic 0) and the vibratory harmonics (1 and up) are judged apart, each against its own
+    scale: a steady force of kilonewtons does not hide a change of a vibratory harmonic of
+    tens of newtons. All-zero scales (locked pins) are skipped.
+    """
+    def worst(c: NDArray[np.complex128], p: NDArray[np.complex128]) -> float:
+        scale = np.abs(c).max(axis=0)
+        if groups is not None:
+            labels = np.asarray(groups)
+            for g in np.unique(labels):
+                scale[labels == g] = scale[labels == g].max()
+        live = scale > 0
+        if not np.any(live):
+            return 0.0
+        return float(np.max(np.abs(c - p)[:, live] / scale[live]))
+
+    if separate_mean:
+        return max(worst(cur[:1], prev[:1]), worst(cur[1:], prev[1:]))
+    return worst(cur, prev)
 
 
 @dataclass
@@ -53,7 +70,8 @@ class PeriodicRecord:
 
 def march(step: Callable[[], None], sample: Callable[[], Array],
           signals: Callable[[Array], Array], *, steps_per_rev: int, revolutions: int,
-          max_revolutions: int, tolerance: float, min_revolutions: int = 2,
+          max_revolutions: int, tolerance: float, groups: Sequence[int] | None = None,
+          separate_mean: bool = False, min_revolutions: int = 2,
           hint: str = "raise max_revolutions") -> PeriodicRecord:
     """March until periodic, then record ``revolutions`` whole revolutions.
 
@@ -70,6 +88,9 @@ def march(step: Callable[[], None], sample: Callable[[], Array],
         Steps per revolution; revolutions recorded; revolutions allowed for the transient;
         largest relative harmonic change between successive revolutions that counts as
         periodic.
+    groups, separate_mean
+        How changes are measured (:func:`harmonic_change`): group labels of the signal
+        columns that share a scale; the mean judged apart from the vibratory harmonics.
     min_revolutions
         Revolutions marched at least before periodicity is tested.
     hint
@@ -95,7 +116,7 @@ def march(step: Callable[[], None], sample: Callable[[], Array],
         rev += 1
         cur = rev_harmonics(signals(block))
         if prev is not None:
-            change = harmonic_change(cur, prev)
+            change = harmonic_change(cur, prev, groups, separate_mean)
             done = rev >= min_revolutions and change <= tolerance
             report(f"revolution {rev} of at most {max_revolutions}: periodicity change "
                    f"{change:.2e}, tolerance {tolerance:g}" + (" (periodic: recording)"
