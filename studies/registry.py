@@ -14,6 +14,7 @@ _LAZY: dict[str, str] = {
     "hub": "studies.hub:SPEC",
     "pendulum": "studies.bifilar:SPEC",
     "collar": "studies.collar:SPEC",
+    "rotor": "studies.rotor:SPEC",
 }
 _LOADED: dict[str, ModelSpec] = {}
 
