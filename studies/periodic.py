@@ -33,25 +33,33 @@ def harmonic_change(cur: NDArray[np.complex128], prev: NDArray[np.complex128],
 
     The scale of a column is its largest harmonic, or with ``groups`` (``groups[j]`` labels
     column j) the largest of its group: the x and y of one vector share a scale, so that a
-    component near zero is not held to its own tiny size. With ``separate_mean`` the mean
-    (harmonic 0) and the vibratory harmonics (1 and up) are judged apart, each against its own
-    scale: a steady force of kilonewtons does not hide a change of a vibratory harmonic of
-    tens of newtons. All-zero scales (locked pins) are skipped.
+    component near zero is not held to its own tiny size. With ``separate_mean`` the
+    vibratory harmonics (1 and up) are judged against the largest vibratory harmonic and the
+    mean against the larger of itself and that: a steady force of kilonewtons does not hide a
+    change of a vibratory harmonic of tens of newtons, and a mean near zero is not held to
+    its own tiny size. All-zero scales (locked pins) are skipped.
     """
-    def worst(c: NDArray[np.complex128], p: NDArray[np.complex128]) -> float:
-        scale = np.abs(c).max(axis=0)
+    def group_max(a: NDArray[np.float64]) -> NDArray[np.float64]:
+        a = a.copy()
         if groups is not None:
             labels = np.asarray(groups)
             for g in np.unique(labels):
-                scale[labels == g] = scale[labels == g].max()
-        live = scale > 0
-        if not np.any(live):
-            return 0.0
-        return float(np.max(np.abs(c - p)[:, live] / scale[live]))
+                a[labels == g] = a[labels == g].max()
+        return a
 
+    change = np.abs(cur - prev)
     if separate_mean:
-        return max(worst(cur[:1], prev[:1]), worst(cur[1:], prev[1:]))
-    return worst(cur, prev)
+        vib = group_max(np.abs(cur[1:]).max(axis=0))
+        mean = np.maximum(group_max(np.abs(cur[0])), vib)
+        parts = [(change[:1], mean), (change[1:], vib)]
+    else:
+        parts = [(change, group_max(np.abs(cur).max(axis=0)))]
+    worst = 0.0
+    for c, scale in parts:
+        live = scale > 0
+        if np.any(live):
+            worst = max(worst, float(np.max(c[:, live] / scale[live])))
+    return worst
 
 
 @dataclass
