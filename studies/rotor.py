@@ -141,7 +141,7 @@ PARAMETERS: dict[str, Param] = {
     "settle_damping_factor": Param(10.0, "1", "factor on the lag and fuselage dampers at the "
                                    "start of settling (falls to 1 over the settling "
                                    "revolutions)", minimum=1.0, maximum=1000.0),
-    "max_revolutions": Param(40, "1", "revolutions allowed to reach a periodic response "
+    "max_revolutions": Param(80, "1", "revolutions allowed to reach a periodic response "
                              "after settling", minimum=2, maximum=2000),
     "periodic_tolerance": Param(1e-2, "1", "max change of harmonics between successive "
                                 "revolutions, relative to the largest", minimum=0.0,
