@@ -423,3 +423,193 @@ class AppliedLoadSet(ElementSet):
 
 
 AppliedLoad.set_class = AppliedLoadSet
+
+
+# ------------------------------------------------------- coupling in the axes of a body
+def _matrix3(x: ArrayLike, what: str, name: str) -> Array:
+    """A real 3 × 3 matrix from a scalar (× I), 3 values (diagonal) or a 3 × 3 array."""
+    a = np.asarray(x, dtype=float)
+    a = a * np.eye(3) if a.ndim == 0 else (np.diag(a) if a.shape == (3,) else a)
+    if a.shape != (3, 3) or not np.all(np.isfinite(a)):
+        raise ValueError(f"frame coupling {name!r}: {what} must be finite (a scalar, 3 values "
+                         "or a 3x3 matrix)")
+    return a
+
+
+@dataclass(eq=False)
+class FrameCoupling(Element):
+    """Linear coupling of two body points, measured in the axes of a third body.
+
+    With Δ = p_b − p_a the separation of the two bodies' points (global, m) and
+    w = (d1·Δ, d2·Δ, d3·Δ) its components in the axes d1, d2, d3 of ``frame`` (the global axes
+    if ``frame`` is None), the coupling exerts on ``body_b`` the force Σ_i f_i d_i with
+
+        f = −K (w − w0) − C ẇ     (components in the frame's axes, N),
+
+    ẇ the rate of w (the velocity of b relative to a as seen in the rotating axes of the
+    frame), and the opposite force on ``body_a`` at its point (``body_a`` None: ground). The
+    generalized forces are those of the virtual work f·δw, so the frame body takes the moment
+    Δ × (−F) of the pair and the three together conserve momentum and angular momentum; the
+    power is f·ẇ.
+
+    ``stiffness`` K (N/m) and ``damping`` C (N·s/m) are any real 3 × 3 matrices (a scalar
+    stands for that multiple of the identity, 3 values for a diagonal):
+
+    * symmetric K: a spring; skew K: a circulatory force (no potential);
+    * symmetric C: a damper; skew C: a gyroscopic force, which does no work;
+    * a damper c acting on the velocity relative to axes that turn at the rate Ω about the
+      frame's d3, −c (ẇ − Ω e3 × w), is C = c I with the skew stiffness K = −c Ω [e3×].
+
+    ``point`` is the global point at t = 0 where the coupling attaches to both bodies (it moves
+    with each of them); ``rest`` is w0 (m, frame axes), by default the initial w. The whole
+    force is non-conservative (its work is booked by the integrators), also its symmetric
+    stiffness: with a turning frame, ½ (w − w0)ᵀ K (w − w0) is quartic in the unknowns.
+    """
+
+    name: str
+    body_a: Body | None
+    body_b: Body
+    frame: Body | None = None
+    point: ArrayLike = (0.0, 0.0, 0.0)
+    stiffness: ArrayLike = 0.0
+    damping: ArrayLike = 0.0
+    rest: ArrayLike | None = None
+
+    def __post_init__(self) -> None:
+        self.K = _matrix3(self.stiffness, "stiffness", self.name)
+        self.C = _matrix3(self.damping, "damping", self.name)
+        if isinstance(self.frame, PointMass):
+            raise ValueError(f"frame coupling {self.name!r}: frame {self.frame.name!r} is a "
+                             "point mass and has no axes")
+        if self.rest is not None:
+            r = np.asarray(self.rest, dtype=float)
+            if r.shape != (3,) or not np.all(np.isfinite(r)):
+                raise ValueError(f"frame coupling {self.name!r}: rest must be 3 finite numbers "
+                                 "(m, frame axes)")
+
+    def group_key(self) -> Hashable:
+        return self.frame is None
+
+
+class FrameCouplingSet(ElementSet):
+    """All frame couplings with (or all without) a frame body, vectorized.
+
+    Per element the unknowns it reads are u = (y, e): y the coordinates of the point terms of
+    Δ = P y + b (P = [c_1 I, c_2 I, …]), e the frame's directors of the active components (the
+    components i whose row or column of K or C is non-zero in some member). Then
+    w_i = e_i·Δ is bilinear, W = ∂w/∂u = [e_iᵀ P | Δᵀ in slot i] and ẇ = W v, and
+
+        Q = Wᵀ f,   ∂Q/∂v = −Wᵀ C W,   ∂Q/∂u = H(f) − Wᵀ K W − Wᵀ C W(v),
+
+    where W(v) = ∂ẇ/∂u = [ė_iᵀ P | Δ̇ᵀ in slot i] and H(f) = Σ_i f_i ∂²w_i/∂u² holds f_i Pᵀ
+    in block (y, e_i) and f_i P in (e_i, y). Repeated unknowns in u (the frame is one of the
+    two bodies) are summed by the assembly, which is the chain rule."""
+
+    nonconservative = True
+
+    def __init__(self, elements, system) -> None:
+        super().__init__(elements, system)
+        self.framed = elements[0].frame is not None
+        exprs = []
+        for e in elements:
+            p = np.asarray(e.point, dtype=float)
+            pb = system.point(e.body_b, system.to_local_point(e.body_b, p))
+            pa = (VecExpr([], p.copy()) if e.body_a is None
+                  else system.point(e.body_a, system.to_local_point(e.body_a, p)))
+            exprs.append(pb - pa)
+        nt = max(len(d.terms) for d in exprs)
+        nj = len(elements)
+        coef = np.zeros((nj, nt))
+        ycols = np.zeros((nj, nt), dtype=np.int64)
+        for j, d in enumerate(exprs):
+            for t, (c, o) in enumerate(d.terms):
+                coef[j, t], ycols[j, t] = c, o
+            ycols[j, len(d.terms):] = d.terms[0][1]  # padding: zero coefficient, same columns
+        self._yidx = (ycols[:, :, None] + np.arange(3)).reshape(nj, 3 * nt)
+        # P (J, 3, 3 nt): Δ = P y + b
+        self._P = np.einsum("jt,ik->jitk", coef, np.eye(3)).reshape(nj, 3, 3 * nt)
+        self._b = np.array([d.const for d in exprs])
+        k = np.array([e.K for e in elements])
+        c = np.array([e.C for e in elements])
+        if self.framed:
+            used = np.any((k != 0) | (c != 0), axis=(0, 1)) | np.any((k != 0) | (c != 0),
+                                                                     axis=(0, 2))
+            self._comps = np.nonzero(used)[0] if used.any() else np.array([0])
+            ecols = np.array([[system.offset[e.frame] + 3 + 3 * i + m for i in self._comps
+                               for m in range(3)] for e in elements], dtype=np.int64)
+            self.idx = np.concatenate([self._yidx, ecols], axis=1)
+        else:
+            self._comps = np.arange(3)
+            self.idx = self._yidx
+        cc = self._comps
+        self._K = k[:, cc][:, :, cc]
+        self._C = c[:, cc][:, :, cc]
+        self._ny = 3 * nt
+        q0 = system.q0_raw
+        w0 = self._w(q0)[0]
+        self._w0 = np.array([w0[j] if e.rest is None else np.asarray(e.rest, float)[cc]
+                             for j, e in enumerate(elements)])
+        self.force_idx = self.idx.ravel()
+        self.fq_rows, self.fq_cols = _outer_pattern(self.idx)
+        self.fv_rows, self.fv_cols = self.fq_rows, self.fq_cols
+
+    # -- kinematics ---------------------------------------------------------------------------
+    def _dirs(self, q: Array) -> Array:
+        """Frame directors of the active components (J, nc, 3)."""
+        nc = len(self._comps)
+        if self.framed:
+            return q[self.idx[:, self._ny:]].reshape(-1, nc, 3)
+        return np.broadcast_to(np.eye(3)[self._comps], (len(self._b), nc, 3))
+
+    def _w(self, q: Array) -> tuple[Array, Array, Array]:
+        """w (J, nc), Δ (J, 3), directors (J, nc, 3)."""
+        delta = np.einsum("jik,jk->ji", self._P, q[self._yidx]) + self._b
+        e = self._dirs(q)
+        return np.einsum("jci,ji->jc", e, delta), delta, e
+
+    def _wmat(self, e: Array, delta: Array) -> Array:
+        """∂w/∂u (J, nc, ku) for directors e (J, nc, 3) and separation Δ (J, 3); with the
+        rates (ė, Δ̇) in their place it is ∂ẇ/∂u."""
+        nj, nc = e.shape[:2]
+        wy = np.einsum("jci,jik->jck", e, self._P)
+        if not self.framed:
+            return wy
+        we = np.einsum("cd,ji->jcdi", np.eye(nc), delta).reshape(nj, nc, 3 * nc)
+        return np.concatenate([wy, we], axis=2)
+
+    def _state(self, q: Array, v: Array):
+        w, delta, e = self._w(q)
+        wm = self._wmat(e, delta)
+        wdot = np.einsum("jck,jk->jc", wm, v[self.idx])
+        f = (-np.einsum("jcd,jd->jc", self._K, w - self._w0)
+             - np.einsum("jcd,jd->jc", self._C, wdot))
+        return f, wm, e, delta
+
+    def local_force(self, q: Array, v: Array) -> Array:
+        """f (J, nc): the force on body b in the frame's axes (active components)."""
+        return self._state(q, v)[0]
+
+    # -- generalized forces -------------------------------------------------------------------
+    def force(self, q, v, t):
+        f, wm, *_ = self._state(q, v)
+        return np.einsum("jck,jc->jk", wm, f).ravel()
+
+    def force_jacobians(self, q, v, t):
+        f, wm, e, _ = self._state(q, v)
+        jv = -np.einsum("jck,jcd,jdl->jkl", wm, self._C, wm)
+        jq = -np.einsum("jck,jcd,jdl->jkl", wm, self._K, wm)
+        if self.framed:
+            vu = v[self.idx]
+            ddelta = np.einsum("jik,jk->ji", self._P, vu[:, : self._ny])
+            de = vu[:, self._ny:].reshape(e.shape)
+            wv = self._wmat(de, ddelta)
+            jq -= np.einsum("jck,jcd,jdl->jkl", wm, self._C, wv)
+            # H(f): f_c Pᵀ in block (y, e_c), its transpose in (e_c, y)
+            ny, nc = self._ny, e.shape[1]
+            hy = np.einsum("jc,jik->jkci", f, self._P).reshape(len(f), ny, 3 * nc)
+            jq[:, :ny, ny:] += hy
+            jq[:, ny:, :ny] += hy.transpose(0, 2, 1)
+        return jq.ravel(), jv.ravel()
+
+
+FrameCoupling.set_class = FrameCouplingSet

@@ -8,7 +8,10 @@ The model (paper Fig. 13, Table 1, with the fuselage-beam reduced to springs and
 * hub — rigid, carrying the rotor's mass and polar inertia, spinning at Ω on the shaft head
   through a driven revolute joint (ψ = Ωt);
 * four bifilars (:func:`studies.bifilar.add_bifilar`) at 90° intervals, 45° from the blades, each
-  ``free`` or ``locked`` (tuning masses clamped to the hub: the paper's case 0);
+  ``free`` or ``locked`` (tuning masses clamped to the hub: the paper's case 0), or, with
+  ``equivalent``, their linear fixed-frame equivalent (:mod:`studies.equivalent`: a particle on
+  the shaft head and a rigid mass on the hub), whose pin angles and tuning-mass centre of mass
+  are reconstructed from the particle for the same outputs;
 * excitation — the blades' in-plane root shears as a hub load rotating with the hub, with 3P and
   5P harmonics in the rotating frame: f = A3 e^{i(3ψ+φ3)} + A5 e^{−i(5ψ+φ5)} (complex in-plane
   components in the hub frame); in the fixed frame both are 4P (progressive and regressive),
@@ -36,6 +39,13 @@ from solver.model import Model
 from solver.system import System
 from solver.timefunctions import linear
 from studies.bifilar import HARDWARE, BifilarParts, add_bifilar, pin_angle
+from studies.equivalent import (
+    EquivalentParts,
+    add_equivalent,
+    equivalent_absorber,
+    equivalent_cm,
+    equivalent_pin_angles,
+)
 from studies.holes import Geometry, design
 from studies.parameters import ModelSpec, Output, Param, ParameterError
 from studies.progress import report
@@ -50,8 +60,9 @@ NEWTON_TOL = 1e-11  # relative Newton tolerance on q (m); see run()
 # mass-controlled and halving the stiffness changes it by tens of percent, the sensitivity the
 # paper's case 3 shows), and away from the bifilars' coupled modes.
 PARAMETERS: dict[str, Param] = {
-    "bifilar": Param("free", "1", "bifilar tuning masses free or locked to the hub",
-                     choices=("free", "locked")),
+    "bifilar": Param("free", "1", "bifilar tuning masses free, locked to the hub, or replaced "
+                     "by their linear fixed-frame equivalent",
+                     choices=("free", "locked", "equivalent")),
     "tuning_order": HARDWARE["tuning_order"],
     "hole": HARDWARE["hole"],
     "hub_speed": HARDWARE["hub_speed"],
@@ -145,7 +156,9 @@ def pin_damping(p: dict[str, Any], holes) -> float:
 
 
 def build(p: dict[str, Any]):
-    """The hub model; returns (model, parts) with handles for outputs."""
+    """The hub model: (model, hub, shaft, parts, holes, (k, c)) with handles for outputs;
+    ``parts`` is the list of :class:`BifilarParts` or, for ``bifilar = "equivalent"``, the
+    :class:`studies.equivalent.EquivalentParts`."""
     omega = p["hub_speed"]
     holes = design(p["hole"], _geometry(p), tuning_order=p["tuning_order"])
     m_bif = p["tuning_mass"] + 2 * p["pin_mass"]
@@ -178,6 +191,13 @@ def build(p: dict[str, Any]):
               Spring("fuselage", None, shaft, stiffness=np.diag([k, k, 0.0]),
                      damping=np.diag([c, c, 0.0])),
               AppliedLoad("blade_shears", hub, force=shear))
+    if p["bifilar"] == "equivalent":
+        # the four bifilars' linear equivalent: the particle on the (non-rotating) shaft head,
+        # the rigid remainder on the hub; the same rolling resistance, as swing damping
+        absorber = equivalent_absorber(holes, N_BIFILARS, pin_damping(p, holes))
+        eq = add_equivalent(model, shaft, hub, np.zeros(3), absorber, omega,
+                            first_angle=np.pi / 4)
+        return model, hub, shaft, eq, holes, (k, c)
     parts: list[BifilarParts] = []
     locked = p["bifilar"] == "locked"
     cp = 0.0 if locked else pin_damping(p, holes)
@@ -206,14 +226,19 @@ def run(params: dict[str, Any]) -> xr.Dataset:
     # bookkeeping needs: a looser Newton tolerance saves about two iterations per step
     integ = make_integrator(sysm, "ep", h, tol=NEWTON_TOL)
     os_ = sysm.offset[shaft]
-    mass_off = [sysm.offset[b.mass] for b in parts]
+    equivalent = isinstance(parts, EquivalentParts)
+    mass_off = [] if equivalent else [sysm.offset[b.mass] for b in parts]
 
     def sample() -> np.ndarray:
         q, v = integ.q, integ.v
         x = q[os_ : os_ + 3]
         xd = v[os_ : os_ + 3]
-        cm = np.mean([q[o : o + 3] for o in mass_off], axis=0)
-        phis = [0.0 if b.locked else pin_angle(sysm, b, hub, q) for b in parts]
+        if equivalent:
+            cm = equivalent_cm(sysm, parts, q, integ.t)
+            phis = equivalent_pin_angles(sysm, parts, q, integ.t)
+        else:
+            cm = np.mean([q[o : o + 3] for o in mass_off], axis=0)
+            phis = [0.0 if b.locked else pin_angle(sysm, b, hub, q) for b in parts]
         f = k * x + c * xd  # force the springs and dampers pass to the fuselage
         return np.array([integ.t, x[0], x[1], f[0], f[1], cm[0], cm[1], *np.degrees(phis)])
 
