@@ -41,7 +41,7 @@ def _case(ds, name_start):
 
 def test_table1_all_cases_ok(table1):
     ds, _ = table1
-    assert ds.sizes["case"] == 4
+    assert ds.sizes["case"] == 5  # Table 1 and the equivalent of case 1
     assert (ds.status.values == 0).all(), ds.message.values
 
 
