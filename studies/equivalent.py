@@ -32,9 +32,9 @@ vector, the hub's direction of rotation at φ = 0). Hence, adding the rolling re
     J φ̈ + c_φ φ̇ + K φ = −B τ·z̈,     B = r (m_b + m_p)                           (kg m),
 
 B being also the bifilar's translational momentum per unit φ̇. The rolling resistance of
-:func:`studies.hub.pin_damping` is a damper c_pin on the pin's rotation relative to its arm-side
-link; that link turns with the hole tangent (φ) and the pin turns by −(r/d) φ relative to the
-hub, so the relative rate is (D/d) φ̇ and the damper dissipates c_pin (D/d)² φ̇²:
+:func:`studies.absorbers.pin_damping` is a damper c_pin on the pin's rotation relative to its
+arm-side link; that link turns with the hole tangent (φ) and the pin turns by −(r/d) φ
+relative to the hub, so the relative rate is (D/d) φ̇ and the damper dissipates c_pin (D/d)² φ̇²:
 c_φ = c_pin (D/d)². For non-circular holes r is the vertex radius of curvature ρ_v and D the
 hole diameter of the osculating circle design: this is a linearization about the vertex.
 
@@ -230,7 +230,7 @@ def equivalent_absorber(holes: Holes, n_absorbers: int, pin_damping: float) -> E
         N ≥ 3 identical bifilars equally spaced in azimuth.
     pin_damping
         c_pin (N·m·s/rad): rolling resistance on each pin's rotation relative to its arm-side
-        link, as :func:`studies.hub.pin_damping` gives it; c_φ = c_pin (D/d)².
+        link, as :func:`studies.absorbers.pin_damping` gives it; c_φ = c_pin (D/d)².
 
     Raises
     ------

@@ -14,11 +14,29 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from studies.progress import report
 
 Array = NDArray[np.float64]
+
+
+def to_rotating(omega: float, t: ArrayLike, x: ArrayLike, y: ArrayLike) -> tuple[Array, Array]:
+    """In-plane components (x, y) of the fixed frame in the hub frame at ψ = Ωt."""
+    psi = omega * np.asarray(t)
+    cs, sn = np.cos(psi), np.sin(psi)
+    return cs * x + sn * y, -sn * x + cs * y
+
+
+def stepper(integ, omega: float) -> Callable[[], None]:
+    """One time step of ``integ``; raises RuntimeError naming the time and the revolution if
+    Newton fails."""
+    def step() -> None:
+        info = integ.step()
+        if not info.converged:
+            raise RuntimeError(f"time step failed at t = {integ.t:.6g} s (revolution "
+                               f"{integ.t * omega / (2 * np.pi):.2f}): {info.message}")
+    return step
 
 
 def rev_harmonics(block: Array, n_max: int = 8) -> NDArray[np.complex128]:

@@ -64,11 +64,14 @@ from solver.model import Model
 from solver.sections import isotropic_section
 from solver.system import System
 from solver.timefunctions import TimeFunction, linear
-from studies.bifilar import HARDWARE, BifilarParts, add_bifilar, pin_angle
-from studies.holes import Geometry, Holes, design
-from studies.hub import pin_damping
+from studies.absorbers import N_BIFILARS, AbsorberProbe, add_absorbers, holes_for
+from studies.absorbers import OUTPUTS as ABSORBER_OUTPUTS
+from studies.absorbers import PARAMETERS as ABSORBERS
+from studies.bifilar import BifilarParts
+from studies.equivalent import EquivalentParts
+from studies.holes import Holes
 from studies.parameters import ModelSpec, Output, Param, ParameterError
-from studies.periodic import march
+from studies.periodic import march, stepper, to_rotating
 from studies.progress import report
 from studies.uh60a import (
     UH60A,
@@ -81,21 +84,11 @@ from studies.uh60a import (
 
 Z = np.array([0.0, 0.0, 1.0])
 N_BLADES = 4
-N_BIFILARS = 4
 FT = 0.3048  # m
 NEWTON_TOL = 1e-10  # relative Newton tolerance on q (m)
 
 PARAMETERS: dict[str, Param] = {
-    "bifilar": Param("free", "1", "bifilar tuning masses free, locked to the hub, or replaced "
-                     "by their linear fixed-frame equivalent",
-                     choices=("free", "locked", "equivalent")),
-    "tuning_order": HARDWARE["tuning_order"],
-    "hole": HARDWARE["hole"],
-    "hub_speed": HARDWARE["hub_speed"],
-    **{name: HARDWARE[name] for name in ("arm_radius", "cm_offset", "tuning_mass", "pin_mass",
-                                         "pin_diameter", "pin_inertia")},
-    "pin_damping_ratio": Param(0.01, "1", "pendulum damping ratio from rolling resistance",
-                               minimum=0.0, maximum=0.5),
+    **ABSORBERS,
     "collective": Param(10.7, "degree", "collective pitch θ0 (deck twist reference, ≈ 0.7R)",
                         minimum=-5.0, maximum=20.0),
     "cyclic_sine": Param(-4.9, "degree", "longitudinal cyclic θs (on sin ψ)", minimum=-15.0,
@@ -157,27 +150,15 @@ FUSELAGE_GJ = 2.0e7  # N m2
 FUSELAGE_MASS = 10.0  # kg/m
 FUSELAGE_ELEMENTS = 2
 
+# The absorbers' hub-level outputs (studies.absorbers), and the rotor's own.
 OUTPUTS: dict[str, Output] = {
-    "time": Output("s", "time", dims=("time",)),
-    "bifilar": Output("1", "bifilar absorber number (0 and 2 are opposite)", dims=("bifilar",)),
-    "hub_x_fixed": Output("m", "hub in-plane displacement x, fixed frame", history=True),
-    "hub_y_fixed": Output("m", "hub in-plane displacement y, fixed frame", history=True),
-    "hub_x_rotating": Output("m", "hub in-plane displacement along the rotating x axis"),
-    "hub_y_rotating": Output("m", "hub in-plane displacement along the rotating y axis"),
-    "hub_force_x_fixed": Output("N", "in-plane force transmitted to the fuselage-beam, x",
-                                history=True, figure="hub_force_history"),
-    "hub_force_y_fixed": Output("N", "in-plane force transmitted to the fuselage-beam, y",
-                                history=True, figure="hub_force_history"),
+    **ABSORBER_OUTPUTS,
     "hub_force_z_fixed": Output("N", "vertical force transmitted to the fuselage-beam",
                                 history=True, harmonics=True),
     "fuselage_moment_x_fixed": Output("N m", "fuselage-beam root bending moment about x (M11)",
                                       history=True, figure="fuselage_moments"),
     "fuselage_moment_y_fixed": Output("N m", "fuselage-beam root bending moment about y (M22)",
                                       history=True, figure="fuselage_moments"),
-    "bifilar_cm_x_fixed": Output("m", "centre of mass of the 4 tuning masses, x", history=True),
-    "bifilar_cm_y_fixed": Output("m", "centre of mass of the 4 tuning masses, y", history=True),
-    "pin_angle": Output("degree", "pin angle of each bifilar", dims=("bifilar", "time"),
-                        history=True, harmonics=True, figure="pin_angles"),
     "thrust": Output("N", "rotor thrust (aerodynamic, along the shaft)", history=True,
                      harmonics=True),
     "mean_inflow": Output("1", "mean induced inflow ratio λ0 of the Peters–He states",
@@ -189,27 +170,10 @@ OUTPUTS: dict[str, Output] = {
     "blade_root_axial": Output("N", "blade 0 root axial force", history=True, harmonics=True),
     "blade_root_torsion": Output("N m", "blade 0 root torsion (pitch-link moment)",
                                  history=True, harmonics=True),
-    "hub_displacement_rotating": Output(
-        "m", "hub in-plane displacement in the rotating frame",
-        components=("hub_x_rotating", "hub_y_rotating")),
-    "hub_displacement_fixed": Output(
-        "m", "hub in-plane displacement in the fixed frame",
-        components=("hub_x_fixed", "hub_y_fixed"), figure="orbits"),
-    "hub_force_fixed": Output(
-        "N", "in-plane hub force transmitted to the fuselage-beam, fixed frame",
-        components=("hub_force_x_fixed", "hub_force_y_fixed")),
     "fuselage_moment_fixed": Output(
         "N m", "fuselage-beam root bending moments (M11, M22), fixed frame",
         components=("fuselage_moment_x_fixed", "fuselage_moment_y_fixed")),
-    "bifilar_cm_displacement": Output(
-        "m", "displacement of the centre of mass of the bifilar tuning masses, fixed frame",
-        components=("bifilar_cm_x_fixed", "bifilar_cm_y_fixed"), figure="orbits"),
 }
-
-
-def _geometry(p: dict[str, Any]) -> Geometry:
-    return Geometry(p["arm_radius"], p["cm_offset"], p["pin_diameter"], p["tuning_mass"],
-                    p["pin_mass"], p["pin_inertia"])
 
 
 def swashplate(theta0: float, theta_c: float, theta_s: float, omega: float,
@@ -246,12 +210,10 @@ class RotorParts:
     blades: list[Beam]
     lines: list[LiftingLine]
     inflow: DynamicInflow
-    bifilars: list[BifilarParts]
-    equivalent: Any
+    absorbers: list[BifilarParts] | EquivalentParts
     holes: Holes
     fuselage_stiffness: float
     fuselage_damping: float
-    lag_dampers: list[RelativeRotation]
 
 
 def add_blade(model: Model, hub, k: int, p: dict[str, Any],
@@ -318,7 +280,7 @@ def build(p: dict[str, Any], damping_factor: float = 1.0) -> tuple[Model, RotorP
     """The rotor model for complete parameters ``p``; ``damping_factor`` multiplies the lag
     and fuselage dampers (settling phase)."""
     omega = p["hub_speed"]
-    holes = design(p["hole"], _geometry(p), tuning_order=p["tuning_order"])
+    holes = holes_for(p)
     g0 = ground()
     model = Model()
     # ---- fuselage-beam and shaft head (non-rotating)
@@ -357,30 +319,15 @@ def build(p: dict[str, Any], damping_factor: float = 1.0) -> tuple[Model, RotorP
     inflow = DynamicInflow("inflow", flight, UH60A.radius, omega, model="peters-he",
                            harmonics=m, power=m + 1, initial_thrust=0.007)
     model.add(inflow)
-    blades, lines, dampers = [], [], []
+    blades, lines = [], []
     for k in range(N_BLADES):
-        blade, damper = add_blade(model, hub, k, p, damping_factor)
+        blade, _ = add_blade(model, hub, k, p, damping_factor)
         lines.append(model.add(airloads(blade, k, p, flight, inflow)))
         blades.append(blade)
-        dampers.append(damper)
-    # ---- bifilars
-    parts: list[BifilarParts] = []
-    equivalent = None
-    if p["bifilar"] == "equivalent":
-        from studies.equivalent import add_equivalent, equivalent_absorber
-
-        absorber = equivalent_absorber(holes, N_BIFILARS,
-                                       pin_damping(p, holes))
-        equivalent = add_equivalent(model, shaft, hub, np.zeros(3), absorber, omega)
-    else:
-        locked = p["bifilar"] == "locked"
-        cp = 0.0 if locked else pin_damping(p, holes)
-        for i in range(N_BIFILARS):
-            parts.append(add_bifilar(model, hub, holes, 0.0, angle=np.pi / 4 + i * np.pi / 2,
-                                     prefix=f"b{i}_", omega=omega, locked=locked,
-                                     pin_damping=cp))
-    return model, RotorParts(hub, shaft, fus, blades, lines, inflow, parts, equivalent, holes,
-                             k_nom * p["fuselage_stiffness_scale"], c_fus, dampers)
+    # ---- bifilars (or their equivalent, whose particle rides on the shaft head)
+    absorbers = add_absorbers(model, hub, shaft, holes, p)
+    return model, RotorParts(hub, shaft, fus, blades, lines, inflow, absorbers, holes,
+                             k_nom * p["fuselage_stiffness_scale"], c_fus)
 
 
 def _line_set(system: System, line: LiftingLine):
@@ -401,7 +348,7 @@ class _Sampler:
         self.blade_root = SectionProbe(parts.blades[0], [0.0])
         self.o_shaft = system.offset[parts.shaft]
         self.o_inflow = system.offset[parts.inflow]
-        self.mass_off = [system.offset[b.mass] for b in parts.bifilars]
+        self.absorbers = AbsorberProbe(system, parts.absorbers, parts.hub)
         self.o_top = system.offset[parts.fuselage.tip]
 
     def __call__(self, integ) -> np.ndarray:
@@ -412,14 +359,7 @@ class _Sampler:
         d = q[self.o_top + 3 : self.o_top + 12].reshape(3, 3)  # rows: d1, d2, d3
         f_top = loads[1, :3] @ d
         m11, m22 = loads[0, 4], loads[0, 5]
-        if parts.bifilars:
-            cm = np.mean([q[o : o + 3] for o in self.mass_off], axis=0)
-            phis = [0.0 if b.locked else pin_angle(s, b, parts.hub, q) for b in parts.bifilars]
-        else:
-            from studies.equivalent import equivalent_cm, equivalent_pin_angles
-
-            cm = equivalent_cm(s, parts.equivalent, q, integ.t)
-            phis = equivalent_pin_angles(s, parts.equivalent, q, integ.t)
+        cm, phis = self.absorbers(q, integ.t)
         acc = getattr(integ, "qdd", None)
         air = self.line_set.airloads(q, v, np.zeros_like(q) if acc is None else acc)
         thrust = float(np.sum(air["force"][:, 2] * air["ds"]))
@@ -429,17 +369,6 @@ class _Sampler:
         return np.array([integ.t, x[0], x[1], f_top[0], f_top[1], f_top[2], m11, m22,
                          cm[0], cm[1], thrust, lam0, br[2], br[1], br[0], br[3],
                          *np.degrees(phis)])
-
-
-def _stepper(integ, omega: float):
-    """One time step of ``integ``; raises RuntimeError with the time and revolution if Newton
-    fails."""
-    def step() -> None:
-        info = integ.step()
-        if not info.converged:
-            raise RuntimeError(f"time step failed at t = {integ.t:.6g} s (revolution "
-                               f"{integ.t * omega / (2 * np.pi):.2f}): {info.message}")
-    return step
 
 
 def _settle(p: dict[str, Any], h: float) -> tuple[dict[str, Any], int, int]:
@@ -457,7 +386,7 @@ def _settle(p: dict[str, Any], h: float) -> tuple[dict[str, Any], int, int]:
         integ = make_integrator(System(model), p["scheme"], h, tol=NEWTON_TOL)
         if state is not None:
             integ.restore(state)
-        step = _stepper(integ, p["hub_speed"])
+        step = stepper(integ, p["hub_speed"])
         for _ in range(p["steps_per_rev"]):
             step()
         state = integ.state()
@@ -488,14 +417,12 @@ def run(params: dict[str, Any]) -> xr.Dataset:
 
     def signals(block: np.ndarray) -> np.ndarray:
         # periodicity of the hub motion in the rotating frame, the hub forces and the pins
-        psi = omega * block[:, 0]
-        xr_ = np.cos(psi) * block[:, 1] + np.sin(psi) * block[:, 2]
-        yr_ = -np.sin(psi) * block[:, 1] + np.cos(psi) * block[:, 2]
+        xr_, yr_ = to_rotating(omega, block[:, 0], block[:, 1], block[:, 2])
         return np.column_stack([xr_, yr_, block[:, 3:5], block[:, len(_Sampler.COLUMNS):]])
 
-    groups = [0, 0, 1, 1] + [2] * (len(parts.bifilars) or N_BIFILARS)
+    groups = [0, 0, 1, 1] + [2] * N_BIFILARS
 
-    rec = march(_stepper(integ, omega), lambda: sampler(integ), signals, steps_per_rev=nrev,
+    rec = march(stepper(integ, omega), lambda: sampler(integ), signals, steps_per_rev=nrev,
                 revolutions=p["revolutions"], max_revolutions=p["max_revolutions"],
                 tolerance=p["periodic_tolerance"], groups=groups, separate_mean=True,
                 hint="raise max_revolutions, settle_revolutions or pin_damping_ratio")
@@ -503,9 +430,8 @@ def run(params: dict[str, Any]) -> xr.Dataset:
     iterations += integ.n_iterations
     data = rec.samples
     t = data[:, 0]
-    psi = omega * t
-    cs, sn = np.cos(psi), np.sin(psi)
     col = {name: data[:, i] for i, name in enumerate(_Sampler.COLUMNS)}
+    x_rot, y_rot = to_rotating(omega, t, col["x"], col["y"])
     thrust = float(col["thrust"].mean())
     disk = math.pi * UH60A.radius**2
     ct = thrust / (p["air_density"] * disk * (omega * UH60A.radius) ** 2)
@@ -514,8 +440,8 @@ def run(params: dict[str, Any]) -> xr.Dataset:
         "bifilar": np.arange(N_BIFILARS),
         "hub_x_fixed": col["x"],
         "hub_y_fixed": col["y"],
-        "hub_x_rotating": cs * col["x"] + sn * col["y"],
-        "hub_y_rotating": -sn * col["x"] + cs * col["y"],
+        "hub_x_rotating": x_rot,
+        "hub_y_rotating": y_rot,
         "hub_force_x_fixed": col["fx"],
         "hub_force_y_fixed": col["fy"],
         "hub_force_z_fixed": col["fz"],
@@ -548,7 +474,7 @@ def run(params: dict[str, Any]) -> xr.Dataset:
 def _check(p: dict[str, Any]) -> None:
     if p["revolutions"] > p["max_revolutions"]:
         raise ParameterError("revolutions must not exceed max_revolutions")
-    design(p["hole"], _geometry(p), tuning_order=p["tuning_order"])
+    holes_for(p)
 
 
 SPEC = ModelSpec("rotor", PARAMETERS, run, _check,
