@@ -38,6 +38,7 @@ from solver.joints import Orientation, Planar, Revolute
 from solver.model import Model
 from solver.system import System
 from solver.timefunctions import linear
+from studies import periodic
 from studies.absorbers import N_BIFILARS, AbsorberProbe, add_absorbers, holes_for, pin_damping
 from studies.absorbers import OUTPUTS as ABSORBER_OUTPUTS
 from studies.absorbers import PARAMETERS as ABSORBERS
@@ -82,6 +83,7 @@ PARAMETERS: dict[str, Param] = {
     "periodic_tolerance": Param(1e-3, "1", "max change of harmonics between successive "
                                 "revolutions, relative to the largest", minimum=0.0,
                                 exclusive_minimum=True, maximum=1.0),
+    **periodic.PARAMETERS,
 }
 
 
@@ -166,7 +168,8 @@ def run(params: dict[str, Any]) -> xr.Dataset:
     rec = march(stepper(integ, omega), sample, signals, steps_per_rev=nrev,
                 revolutions=p["revolutions"], max_revolutions=p["max_revolutions"],
                 tolerance=p["periodic_tolerance"],
-                hint="raise max_revolutions or pin_damping_ratio")
+                hint="raise max_revolutions or pin_damping_ratio",
+                window=p["extrapolation_window"])
     data = rec.samples
     t = data[:, 0]
     x_rot, y_rot = to_rotating(omega, t, data[:, 1], data[:, 2])
@@ -184,7 +187,9 @@ def run(params: dict[str, Any]) -> xr.Dataset:
         "pin_angle": data[:, 7:].T,
     })
     ds.attrs.update(hub_speed=float(omega), revolutions=int(p["revolutions"]),
-                    samples_per_rev=int(nrev), transient_revolutions=int(rec.transient),
+                    samples_per_rev=int(nrev), extrapolated=int(rec.extrapolated),
+                    extrapolation_residual=float(rec.residual),
+                    transient_revolutions=int(rec.transient),
                     tuning_order_linear=float(holes.order_linear),
                     pin_damping=float(0.0 if p["bifilar"] == "locked" else pin_damping(p, holes)),
                     fuselage_stiffness=float(k), fuselage_damping=float(c),
@@ -196,6 +201,7 @@ def run(params: dict[str, Any]) -> xr.Dataset:
 def _check(p: dict[str, Any]) -> None:
     if p["revolutions"] > p["max_revolutions"]:
         raise ParameterError("revolutions must not exceed max_revolutions")
+    periodic.check(p)
     check(p)
 
 

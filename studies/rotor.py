@@ -64,6 +64,7 @@ from solver.model import Model
 from solver.sections import isotropic_section
 from solver.system import System
 from solver.timefunctions import TimeFunction, linear
+from studies import periodic
 from studies.absorbers import N_BIFILARS, AbsorberProbe, add_absorbers, holes_for
 from studies.absorbers import OUTPUTS as ABSORBER_OUTPUTS
 from studies.absorbers import PARAMETERS as ABSORBERS
@@ -139,6 +140,7 @@ PARAMETERS: dict[str, Param] = {
     "periodic_tolerance": Param(1e-2, "1", "max change of harmonics between successive "
                                 "revolutions, relative to the largest", minimum=0.0,
                                 exclusive_minimum=True, maximum=1.0),
+    **periodic.PARAMETERS,
 }
 
 # Nominal fuselage-beam section other than bending: axial, shear and torsion stiff (vertical
@@ -425,7 +427,8 @@ def run(params: dict[str, Any]) -> xr.Dataset:
     rec = march(stepper(integ, omega), lambda: sampler(integ), signals, steps_per_rev=nrev,
                 revolutions=p["revolutions"], max_revolutions=p["max_revolutions"],
                 tolerance=p["periodic_tolerance"], groups=groups, separate_mean=True,
-                hint="raise max_revolutions, settle_revolutions or pin_damping_ratio")
+                hint="raise max_revolutions, settle_revolutions or pin_damping_ratio",
+                window=p["extrapolation_window"])
     steps += integ.n_steps
     iterations += integ.n_iterations
     data = rec.samples
@@ -458,7 +461,9 @@ def run(params: dict[str, Any]) -> xr.Dataset:
         "blade_root_torsion": col["t1"],
     })
     ds.attrs.update(hub_speed=float(omega), revolutions=int(p["revolutions"]),
-                    samples_per_rev=int(nrev), transient_revolutions=int(
+                    samples_per_rev=int(nrev), extrapolated=int(rec.extrapolated),
+                    extrapolation_residual=float(rec.residual),
+                    transient_revolutions=int(
                         rec.transient + p["settle_revolutions"]),
                     periodicity_change=float(rec.change),
                     tuning_order_linear=float(parts.holes.order_linear),
@@ -474,6 +479,7 @@ def run(params: dict[str, Any]) -> xr.Dataset:
 def _check(p: dict[str, Any]) -> None:
     if p["revolutions"] > p["max_revolutions"]:
         raise ParameterError("revolutions must not exceed max_revolutions")
+    periodic.check(p)
     holes_for(p)
 
 

@@ -1,0 +1,120 @@
+"""Reaching the periodic response (studies.periodic) against closed-form sequences.
+
+A signal made of a periodic part and decaying free modes, e^{st} with Re s < 0 at frequencies
+that are not whole per-rev harmonics (the lag mode, the fuselage, a pendulum), is what a
+forced, damped linear system gives after its start. Its periodic part is known exactly, so
+the extrapolated limit and the marching can be checked against it.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from studies.parameters import ParameterError
+from studies.periodic import (
+    PARAMETERS,
+    check,
+    harmonic_change,
+    march,
+    rev_harmonics,
+    rre_weights,
+)
+
+OMEGA = 2 * np.pi  # rad/s: one revolution per second
+N = 64  # samples per revolution
+
+
+def periodic_part(t: np.ndarray) -> np.ndarray:
+    """Two columns: a 3P/4P response on a mean, and a 1P one."""
+    psi = OMEGA * t
+    return np.column_stack([2.0 + np.cos(3 * psi) + 0.05 * np.sin(4 * psi + 0.3),
+                            0.5 * np.sin(psi - 0.2)])
+
+
+# free modes: (s per revolution, amplitudes of the two columns); per-rev decay |e^{sT}| from
+# 0.87 (a lag mode at 0.27/rev with 4 % damping, aliased) to 0.55
+MODES = [(-0.14 + 2j * np.pi * 0.27, (0.8, 0.3)), (-0.05 + 2j * np.pi * 2.93, (0.4, -0.2)),
+         (-0.6 + 2j * np.pi * 0.73, (0.5, 0.6))]
+
+
+def signal(t: np.ndarray) -> np.ndarray:
+    out = periodic_part(t)
+    for s, amp in MODES:
+        e = np.exp(s * t)  # t in revolutions (T = 1 s)
+        out = out + np.real(np.outer(e, np.asarray(amp) * (1 + 0.5j)))
+    return out
+
+
+def sampler():
+    """(step, sample) that walk through ``signal`` at N samples per revolution."""
+    k = [0]
+
+    def step() -> None:
+        k[0] += 1
+
+    def sample() -> np.ndarray:
+        t = k[0] / N
+        return np.concatenate([[t], signal(np.array([t]))[0]])
+
+    return step, sample
+
+
+def test_rre_is_exact_for_a_linear_sequence():
+    """s_j = s* + Σ Re(μ_m^j v_m) with 3 complex modes (6 eigenvalues μ, μ̄): 7 changes
+    (8 members) give s* to roundoff."""
+    rng = np.random.default_rng(1)
+    star = rng.normal(size=20)
+    mus = [0.9 * np.exp(0.4j), 0.7 * np.exp(2.0j), 0.95 * np.exp(-1.1j)]
+    vs = [rng.normal(size=20) + 1j * rng.normal(size=20) for _ in mus]
+    seq = [star + sum(np.real(mu**j * v) for mu, v in zip(mus, vs, strict=True))
+           for j in range(8)]
+    gamma, residual = rre_weights(seq)
+    assert gamma.sum() == pytest.approx(1.0, abs=1e-12)
+    est = np.tensordot(gamma, np.array(seq[1:]), axes=1)
+    assert np.max(np.abs(est - star)) < 1e-9
+    assert residual < 1e-9
+
+
+def test_march_extrapolates_the_periodic_part():
+    """The estimate from 8-revolution windows is the periodic part to the tolerance's order
+    after about 12 revolutions; marching alone is still far from it."""
+    step, sample = sampler()
+    rec = march(step, sample, lambda b: b[:, 1:], steps_per_rev=N, revolutions=2,
+                max_revolutions=40, tolerance=1e-6, window=8)
+    assert rec.extrapolated and rec.transient <= 14
+    t = rec.samples[:, 0]
+    assert np.allclose(np.diff(t), 1.0 / N)  # two whole revolutions after the transient
+    err = np.abs(rec.samples[:, 1:] - periodic_part(t)).max()
+    assert err < 1e-6
+    # what marching alone would have recorded at that point: the transient is still there
+    marched = signal(t) - periodic_part(t)
+    assert np.abs(marched).max() > 1e-3
+
+
+def test_march_without_extrapolation_is_marched():
+    step, sample = sampler()
+    rec = march(step, sample, lambda b: b[:, 1:], steps_per_rev=N, revolutions=1,
+                max_revolutions=400, tolerance=1e-5, window=0)
+    assert not rec.extrapolated
+    t = rec.samples[:, 0]
+    assert np.allclose(rec.samples[:, 1:], signal(t))  # the marched samples themselves
+    # periodic within the tolerance (decay 0.95 per revolution: some 180 revolutions), and
+    # as far from the periodic part as the slowest mode's change allows (1/(1 − 0.95))
+    assert rec.transient > 150
+    cur = rev_harmonics(rec.samples[:, 1:])
+    assert harmonic_change(cur, rev_harmonics(periodic_part(t)), None) < 20 * 1e-5
+
+
+def test_march_raises_when_not_periodic():
+    step, sample = sampler()
+    with pytest.raises(RuntimeError, match="not periodic after 6 revolutions"):
+        march(step, sample, lambda b: b[:, 1:], steps_per_rev=N, revolutions=1,
+              max_revolutions=6, tolerance=1e-9, window=4)
+
+
+def test_window_of_one_is_refused():
+    p = {name: prm.default for name, prm in PARAMETERS.items()}
+    check(p)
+    with pytest.raises(ParameterError, match="extrapolation_window = 1"):
+        check({**p, "extrapolation_window": 1})
