@@ -53,7 +53,10 @@ PARAMETERS: dict[str, Param] = {
 
 
 def check(p: dict[str, Any]) -> None:
-    """Cross-checks of :data:`PARAMETERS`."""
+    """Cross-checks of the marching parameters (:data:`PARAMETERS` and the model's own
+    ``revolutions`` and ``max_revolutions``)."""
+    if p["revolutions"] > p["max_revolutions"]:
+        raise ParameterError("revolutions must not exceed max_revolutions")
     if p["extrapolation_window"] == 1:
         raise ParameterError("extrapolation_window = 1: must be 0 (march only) or at least 2 "
                              "(an extrapolation needs two changes)")

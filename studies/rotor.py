@@ -71,7 +71,7 @@ from studies.absorbers import PARAMETERS as ABSORBERS
 from studies.bifilar import BifilarParts
 from studies.equivalent import EquivalentParts
 from studies.holes import Holes
-from studies.parameters import ModelSpec, Output, Param, ParameterError
+from studies.parameters import ModelSpec, Output, Param
 from studies.periodic import march, stepper, to_rotating
 from studies.progress import report
 from studies.uh60a import (
@@ -477,8 +477,6 @@ def run(params: dict[str, Any]) -> xr.Dataset:
 
 
 def _check(p: dict[str, Any]) -> None:
-    if p["revolutions"] > p["max_revolutions"]:
-        raise ParameterError("revolutions must not exceed max_revolutions")
     periodic.check(p)
     holes_for(p)
 

@@ -114,7 +114,10 @@ def test_march_raises_when_not_periodic():
 
 
 def test_window_of_one_is_refused():
-    p = {name: prm.default for name, prm in PARAMETERS.items()}
+    p = {**{name: prm.default for name, prm in PARAMETERS.items()}, "revolutions": 1,
+         "max_revolutions": 10}
     check(p)
     with pytest.raises(ParameterError, match="extrapolation_window = 1"):
         check({**p, "extrapolation_window": 1})
+    with pytest.raises(ParameterError, match="revolutions must not exceed max_revolutions"):
+        check({**p, "revolutions": 11})
