@@ -1,4 +1,4 @@
-"""Cases per hour of the default study (the paper's Table 1 on the hub model).
+"""Cases per hour of the hub model's built-in study (the paper's Table 1 on the hub model).
 
     python benchmarks/hub.py --workers 1 2 [--profile]
 

@@ -19,17 +19,15 @@ import time
 
 import numpy as np
 
-from solver.integrators import make_integrator
 from solver.system import System
-from studies.rotor import NEWTON_TOL, SPEC, build, run
+from studies.rotor import SPEC, build, integrator, run
 
 
 def per_revolution(p: dict, revolutions: int, profile: bool) -> dict:
     t0 = time.perf_counter()
     model, _ = build(p)
     system = System(model)
-    integ = make_integrator(system, p["scheme"], 2 * np.pi / p["hub_speed"] / p["steps_per_rev"],
-                            tol=NEWTON_TOL)
+    integ = integrator(system, p, 2 * np.pi / p["hub_speed"] / p["steps_per_rev"])
     setup = time.perf_counter() - t0
     profiler = None
     if profile:

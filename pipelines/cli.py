@@ -47,9 +47,9 @@ USER_ERRORS = (StudyError, ParameterError, ArchiveError, SweepError, FileNotFoun
                InputError)
 
 
-def default_study(model: str = "hub") -> Traversable:
+def default_study(model: str = "rotor") -> Traversable:
     """The built-in study of ``model``: the paper's Table 1 cases 0–3 and the linear
-    equivalent of case 1, on the hub model (default) or the rotor model."""
+    equivalent of case 1, on the rotor model (default) or the hub model."""
     return resources.files("studies") / BUILT_IN_STUDIES[model]
 
 
@@ -231,19 +231,19 @@ def plot(archive: Path, out_dir: Path, formats: tuple[str, ...]) -> None:
 @click.option("--out", "out_dir", default=Path("results"), show_default=True,
               type=click.Path(file_okay=False, path_type=Path),
               help="Output directory: cases/, archive.nc and plots/.")
-@click.option("--model", "model", default="hub", show_default=True,
+@click.option("--model", "model", default="rotor", show_default=True,
               type=click.Choice(sorted(BUILT_IN_STUDIES)),
-              help="hub: a rigid hub with assumed 3P/5P blade shears (minutes); rotor: the "
-                   "UH-60 rotor with elastic blades and aerodynamics, the paper's model (about "
-                   "5 minutes of CPU per case: the built-in study takes about 19 minutes "
-                   "with 2 workers).")
+              help="rotor: the paper's UH-60 rotor with elastic blades and aerodynamics (5 to 9 "
+                   "minutes of CPU per case: the built-in study takes about 20 minutes with 2 "
+                   "workers); hub: a rigid hub with assumed 3P/5P blade shears (under 2 "
+                   "minutes).")
 @workers_option
 @scheduler_option
 @click.pass_context
 def run(ctx: click.Context, out_dir: Path, model: str, workers: int | None,
         scheduler: str | None) -> None:
     """Run the built-in study (the paper's Table 1, cases 0-3, and the linear equivalent of
-    case 1) on the hub or the rotor model, and plot it into DIR/plots.
+    case 1) on the rotor (default) or the hub model, and plot it into DIR/plots.
 
     Exit status 0 if every case is ok, 1 if some failed (the ok ones are still plotted).
     """
