@@ -233,8 +233,8 @@ def plot(archive: Path, out_dir: Path, formats: tuple[str, ...]) -> None:
               help="Output directory: cases/, archive.nc and plots/.")
 @click.option("--model", "model", default="rotor", show_default=True,
               type=click.Choice(sorted(BUILT_IN_STUDIES)),
-              help="rotor: the paper's UH-60 rotor with elastic blades and aerodynamics (5 to 9 "
-                   "minutes of CPU per case: the built-in study takes about 20 minutes with 2 "
+              help="rotor: the paper's UH-60 rotor with elastic blades and aerodynamics (6 to 14 "
+                   "minutes per case: the built-in study takes about 25 minutes with 2 "
                    "workers); hub: a rigid hub with assumed 3P/5P blade shears (under 2 "
                    "minutes).")
 @workers_option
