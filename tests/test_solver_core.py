@@ -388,6 +388,28 @@ def test_galpha_spectral_radius(wh):
         assert abs(rho - 0.5) <= 0.02
 
 
+# The rotor's time step (studies.rotor): the frequency error of a 3P and a 4P oscillation at
+# 120 steps per revolution, as its docstring quotes them (relative frequency error, numerical
+# damping ratio) for ρ∞ = 0.5 (galpha, the rotor's default) and ρ∞ = 0 (ed's linear part).
+@pytest.mark.parametrize("scheme, rho_inf, harmonic, error, damping", [
+    ("galpha", 0.5, 3, -0.0031, 7e-5),
+    ("galpha", 0.5, 4, -0.0054, 1.7e-4),
+    ("galpha", 0.0, 3, -0.0107, 1.8e-3),
+    ("galpha", 0.0, 4, -0.0183, 4.0e-3),
+])
+def test_galpha_frequency_error_at_the_rotor_step(scheme, rho_inf, harmonic, error, damping):
+    wh = 2 * np.pi * harmonic / 120
+    x, v, _ = _oscillator_response(scheme, wh, rho_inf=rho_inf, steps=200)
+    roots = fitted_roots([x, v], 3)
+    root = roots[np.argmax(roots.imag)]  # the oscillatory pair (the third root is spurious)
+    theory = generalized_alpha_roots(wh, rho_inf)
+    assert abs(root - theory[np.argmax(theory.imag)]) <= 1e-9
+    lam = np.log(root)
+    # measured: the quoted values to their last digit
+    assert lam.imag / wh - 1 == pytest.approx(error, abs=0.6e-4)
+    assert -lam.real / abs(lam) == pytest.approx(damping, rel=0.1, abs=1e-5)
+
+
 @pytest.mark.parametrize("wh", WH)
 def test_ed_spectral_radius_and_energy_decay(wh):
     x, v, e = _oscillator_response("ed", wh)
