@@ -209,8 +209,9 @@ class ElementSet:
         return np.bincount(self.nh_rows, da * v[self.nh_cols], minlength=self.n_nonholonomic)
 
     # -- step hooks -----------------------------------------------------------------------
-    def accept(self, q: Array) -> None:
-        """Called after every converged step (e.g. to unwrap angles)."""
+    def accept(self, q: Array, v: Array, t: float) -> None:
+        """Called after every converged step with its end state (e.g. to unwrap angles, or
+        to record a history)."""
 
 
 def group_elements(elements: list) -> list[tuple[type[ElementSet], list]]:

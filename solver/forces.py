@@ -205,6 +205,16 @@ class RelativeRotation(Element):
 
     Moment on ``body_b`` about ``axis`` = −k (φ − φ0) − c φ̇ (N·m), φ the relative rotation of
     b with respect to a about the axis (rad), measured as in Eq. (3). ``body_a`` None is ground.
+
+    Optional **delayed feedback** (a settling device for periodically forced models): the
+    extra moment −a [φ(t) − φ(t − τ)] − b [φ̇(t) − φ̇(t − τ)], with a = ``delayed_stiffness``
+    (N·m/rad), b = ``delayed_damping`` (N·m·s/rad) and τ = ``delay`` (s). It vanishes on any
+    motion of period τ, so a periodic response of period τ is left exactly as it is, while a
+    transient of frequency ω (in the bodies' frame) sees the extra dynamic stiffness
+    (a + iωb)(1 − e^{−iωτ}) (time-delayed feedback control, Pyragas 1992). With
+    a = bω sin ωτ / (1 − cos ωτ) its stiffness part vanishes and its damping is 2b at ω. The
+    past values come from the converged steps (linear interpolation in time); before one
+    delay has been marched the feedback is off.
     """
 
     name: str
@@ -214,18 +224,35 @@ class RelativeRotation(Element):
     stiffness: float = 0.0
     damping: float = 0.0
     phi0: float = 0.0
+    delay: float = 0.0
+    delayed_stiffness: float = 0.0
+    delayed_damping: float = 0.0
 
     def __post_init__(self) -> None:
         if not (np.isfinite(self.stiffness) and np.isfinite(self.damping)
                 and self.stiffness >= 0 and self.damping >= 0):
             raise ValueError(f"rotational spring {self.name!r}: stiffness and damping must be "
                              "finite and ≥ 0")
+        if not (np.isfinite(self.delayed_stiffness) and np.isfinite(self.delayed_damping)
+                and self.delayed_damping >= 0):
+            raise ValueError(f"rotational spring {self.name!r}: delayed_stiffness must be "
+                             "finite and delayed_damping finite and ≥ 0, got "
+                             f"{self.delayed_stiffness!r}, {self.delayed_damping!r}")
+        if self.feedback and not (np.isfinite(self.delay) and self.delay > 0):
+            raise ValueError(f"rotational spring {self.name!r}: delay = {self.delay!r} s must "
+                             "be > 0 with delayed feedback")
         for b in (self.body_a, self.body_b):
             if isinstance(b, PointMass):
                 raise ValueError(f"rotational spring {self.name!r}: {b.name!r} has no rotation")
 
+    @property
+    def feedback(self) -> bool:
+        """Whether the element carries delayed feedback."""
+        return self.delayed_stiffness != 0.0 or self.delayed_damping != 0.0
+
     def group_key(self) -> Hashable:
-        return (self.body_a is None, self.stiffness != 0.0, self.damping != 0.0)
+        return (self.body_a is None, self.stiffness != 0.0, self.damping != 0.0,
+                self.feedback)
 
 
 class RelativeRotationSet(ElementSet):
@@ -270,13 +297,41 @@ class RelativeRotationSet(ElementSet):
         if e0.stiffness != 0.0:
             self.grad_idx = flat
             self.stiff_rows, self.stiff_cols = pr, pc
-        if e0.damping != 0.0:
+        self._fb = e0.feedback
+        if e0.damping != 0.0 or self._fb:
             self.force_idx = flat
             self.fv_rows, self.fv_cols = pr, pc
             self.nonconservative = True
+        if self._fb:
+            self.fq_rows, self.fq_cols = pr, pc
+            self.a = np.array([e.delayed_stiffness for e in elements])
+            self.b = np.array([e.delayed_damping for e in elements])
+            self.tau = np.array([e.delay for e in elements])
+            self._hist: list[tuple[float, Array, Array]] = []  # (t, φ, φ̇) of converged steps
 
-    def accept(self, q):
-        self._ref = self._phi_grad(q)[0]
+    def accept(self, q, v, t):
+        phi, g = self._phi_grad(q)
+        self._ref = phi
+        if self._fb:
+            self._hist.append((float(t), phi, np.einsum("jk,jk->j", g, v[self.idx])))
+            # keep what the longest delay can still reach
+            while len(self._hist) > 2 and self._hist[1][0] <= t - self.tau.max():
+                self._hist.pop(0)
+
+    def _delayed(self, t, phi, rate):
+        """φ(t − τ) and φ̇(t − τ) from the history; the present values (no feedback) for
+        members whose delay reaches before the first recorded step."""
+        if not self._hist:
+            return phi, rate
+        ht = np.array([h[0] for h in self._hist])
+        hphi = np.array([h[1] for h in self._hist])
+        hrate = np.array([h[2] for h in self._hist])
+        td = t - self.tau
+        pd, rd = phi.copy(), rate.copy()
+        for j in np.nonzero(td >= ht[0] - 1e-9 * self.tau)[0]:
+            pd[j] = np.interp(td[j], ht, hphi[:, j])
+            rd[j] = np.interp(td[j], ht, hrate[:, j])
+        return pd, rd
 
     def _phi_grad(self, q):
         """φ (J,) unwrapped against the last converged step, and ∂φ/∂q at ``idx`` (J, k)."""
@@ -330,13 +385,22 @@ class RelativeRotationSet(ElementSet):
         return (self.k[:, None, None] * g[:, :, None] * g[:, None, :]).ravel()
 
     def force(self, q, v, t):
-        _, g = self._phi_grad(q)
+        phi, g = self._phi_grad(q)
         rate = np.einsum("jk,jk->j", g, v[self.idx])
-        return (-(self.c * rate)[:, None] * g).ravel()
+        moment = -self.c * rate
+        if self._fb:
+            pd, rd = self._delayed(t, phi, rate)
+            moment -= self.a * (phi - pd) + self.b * (rate - rd)
+        return (moment[:, None] * g).ravel()
 
     def force_jacobians(self, q, v, t):
         _, g = self._phi_grad(q)
-        return np.zeros(0), (-self.c[:, None, None] * g[:, :, None] * g[:, None, :]).ravel()
+        ggt = g[:, :, None] * g[:, None, :]
+        # (the terms of ∂g/∂q times the moment are left out, as for the plain damper)
+        fv = (-(self.c + self.b if self._fb else self.c)[:, None, None] * ggt).ravel()
+        if not self._fb:
+            return np.zeros(0), fv
+        return (-self.a[:, None, None] * ggt).ravel(), fv
 
 
 def _active(*coefs: Array) -> NDArray[np.int64]:

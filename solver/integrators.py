@@ -218,7 +218,7 @@ class Integrator:
         self.n_factorizations += info.factorizations
         if info.converged:
             self.n_steps += 1
-            self.sys.accept(self.q)
+            self.sys.accept(self.q, self.v, self.t)
         return info
 
     # ------------------------------------------------------------------ the template

@@ -322,10 +322,10 @@ class System:
     def nonholonomic_curvature(self, q: Array, v: Array) -> Array:
         return _cat([s.nh_curvature(q, v) for s in self.nh_sets], float)
 
-    def accept(self, q: Array) -> None:
-        """Tell every set that a step converged at q."""
+    def accept(self, q: Array, v: Array, t: float) -> None:
+        """Tell every set that a step converged at (q, v) at time t (s)."""
         for s in self.sets:
-            s.accept(q)
+            s.accept(q, v, t)
 
     # ------------------------------------------------------------------ outputs
     def angular_momentum(self, q: Array, v: Array) -> Array:
