@@ -165,7 +165,8 @@ def march(step: Callable[[], None], sample: Callable[[], Array],
           max_revolutions: int, tolerance: float, groups: Sequence[int] | None = None,
           separate_mean: bool = False, min_revolutions: int = 2,
           hint: str = "raise max_revolutions", window: int = 0,
-          max_residual: float = 0.1) -> PeriodicRecord:
+          max_residual: float = 0.1,
+          before_recording: Callable[[], None] | None = None) -> PeriodicRecord:
     """March until periodic, then record ``revolutions`` whole revolutions.
 
     With ``window`` ≥ 2 the periodic response is also estimated as the limit of the sequence
@@ -205,6 +206,9 @@ def march(step: Callable[[], None], sample: Callable[[], Array],
     window, max_residual
         Revolutions whose changes the extrapolation uses (0: march only); largest
         unexplained part of an accepted extrapolation.
+    before_recording
+        Called once the marched response is periodic, before the recorded revolutions
+        (e.g. to remove a settling device that vanishes on the periodic response).
 
     Raises
     ------
@@ -260,6 +264,8 @@ def march(step: Callable[[], None], sample: Callable[[], Array],
         if rev >= max_revolutions:
             raise RuntimeError(f"response not periodic after {max_revolutions} revolutions "
                                f"(last change {change:.2e} > tolerance {tolerance:g}); {hint}")
+    if before_recording is not None:
+        before_recording()
     return PeriodicRecord(advance(steps_per_rev * revolutions), rev, change)
 
 
