@@ -317,21 +317,28 @@ class RelativeRotationSet(ElementSet):
             # keep what the longest delay can still reach
             while len(self._hist) > 2 and self._hist[1][0] <= t - self.tau.max():
                 self._hist.pop(0)
+            # arrays for the lookups of the next step's Newton iterations (built once here)
+            self._ht = np.array([h[0] for h in self._hist])
+            self._hphi = np.array([h[1] for h in self._hist])
+            self._hrate = np.array([h[2] for h in self._hist])
 
-    def _delayed(self, t, phi, rate):
-        """φ(t − τ) and φ̇(t − τ) from the history; the present values (no feedback) for
-        members whose delay reaches before the first recorded step."""
+    def _reached(self, t) -> NDArray[np.bool_]:
+        """Members whose delay reaches a recorded step from t (the others have no feedback
+        yet)."""
         if not self._hist:
-            return phi, rate
-        ht = np.array([h[0] for h in self._hist])
-        hphi = np.array([h[1] for h in self._hist])
-        hrate = np.array([h[2] for h in self._hist])
-        td = t - self.tau
-        pd, rd = phi.copy(), rate.copy()
-        for j in np.nonzero(td >= ht[0] - 1e-9 * self.tau)[0]:
-            pd[j] = np.interp(td[j], ht, hphi[:, j])
-            rd[j] = np.interp(td[j], ht, hrate[:, j])
-        return pd, rd
+            return np.zeros(len(self.tau), dtype=bool)
+        return t - self.tau >= self._ht[0] - 1e-9 * self.tau
+
+    def _feedback(self, t, phi, rate):
+        """The delayed-feedback moment −a[φ(t) − φ(t − τ)] − b[φ̇(t) − φ̇(t − τ)] (J,), with
+        the past values interpolated linearly in the converged steps' history."""
+        on = self._reached(t)
+        moment = np.zeros(len(self.tau))
+        for j in np.nonzero(on)[0]:
+            td = t - self.tau[j]
+            moment[j] = -(self.a[j] * (phi[j] - np.interp(td, self._ht, self._hphi[:, j]))
+                          + self.b[j] * (rate[j] - np.interp(td, self._ht, self._hrate[:, j])))
+        return moment
 
     def _phi_grad(self, q):
         """φ (J,) unwrapped against the last converged step, and ∂φ/∂q at ``idx`` (J, k)."""
@@ -389,18 +396,18 @@ class RelativeRotationSet(ElementSet):
         rate = np.einsum("jk,jk->j", g, v[self.idx])
         moment = -self.c * rate
         if self._fb:
-            pd, rd = self._delayed(t, phi, rate)
-            moment -= self.a * (phi - pd) + self.b * (rate - rd)
+            moment += self._feedback(t, phi, rate)
         return (moment[:, None] * g).ravel()
 
     def force_jacobians(self, q, v, t):
         _, g = self._phi_grad(q)
         ggt = g[:, :, None] * g[:, None, :]
         # (the terms of ∂g/∂q times the moment are left out, as for the plain damper)
-        fv = (-(self.c + self.b if self._fb else self.c)[:, None, None] * ggt).ravel()
         if not self._fb:
-            return np.zeros(0), fv
-        return (-self.a[:, None, None] * ggt).ravel(), fv
+            return np.zeros(0), (-self.c[:, None, None] * ggt).ravel()
+        on = self._reached(t)  # the feedback's own terms only where it acts
+        fv = (-(self.c + on * self.b)[:, None, None] * ggt).ravel()
+        return (-(on * self.a)[:, None, None] * ggt).ravel(), fv
 
 
 def _active(*coefs: Array) -> NDArray[np.int64]:
