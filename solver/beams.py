@@ -379,13 +379,21 @@ class BeamSet(ElementSet):
         qm = self._element_vectors(0.5 * (qi + qf))
         return self._force(qm, self._stress(0.5 * (ei + ef)))
 
+    def _material(self, qe: Array) -> Array:
+        """Material stiffness Σ_g Bᵀ wC B per element (E, 48, 48), with B = h Q in the padded
+        slots (E · width, 6, 48): positive semidefinite."""
+        n_el = len(qe)
+        b = (self._hp.reshape(n_el, -1, 16, 16) @ qe[:, None]).reshape(-1, 6, 48)
+        cb = self._wCp @ b
+        return np.swapaxes(b.reshape(n_el, -1, 48), 1, 2) @ cb.reshape(n_el, -1, 48)
+
+    def material_stiffness(self, q):
+        return self._material(self._element_vectors(q)).ravel()
+
     def stiffness(self, q):
         qe, e = self._strains(q)
         n_el = len(qe)
-        # B = h Q in the padded slots, (E · width, 6, 48): material part Σ_g Bᵀ wC B
-        b = (self._hp.reshape(n_el, -1, 16, 16) @ qe[:, None]).reshape(-1, 6, 48)
-        cb = self._wCp @ b
-        k = np.swapaxes(b.reshape(n_el, -1, 48), 1, 2) @ cb.reshape(n_el, -1, 48)
+        k = self._material(qe)
         hs = self._stress_matrices(self._stress(e))  # geometric part: hs ⊗ I3
         kv = k.reshape(n_el, 16, 3, 16, 3)
         for c in range(3):

@@ -136,6 +136,13 @@ class ElementSet:
     def stiffness(self, q: Array) -> Array:
         return EMPTY_F
 
+    def material_stiffness(self, q: Array) -> Array:
+        """A positive semidefinite part of the Hessian at ``(stiff_rows, stiff_cols)``: the
+        material part BᵀCB of a strain energy ½εᵀCε (without the geometric part, which has no
+        sign). The default is the Hessian itself, for sets whose Hessian is semidefinite
+        (linear springs; Gauss–Newton rotational springs)."""
+        return self.stiffness(q)
+
     # -- generalized forces ---------------------------------------------------------------
     def force(self, q: Array, v: Array, t: float) -> Array:
         return EMPTY_F

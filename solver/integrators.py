@@ -137,6 +137,7 @@ class Integrator:
         self.n_factorizations = 0
         self.scale = max(1.0, float(np.abs(self.q).max()))
         self.conservative = not system.has_nonconservative
+        self._nk = system.n  # kinematic unknowns leading the Newton vector (ed: two stages)
 
     # what a step starts from; schemes with more history extend it
     STATE: tuple[str, ...] = ("t", "q", "v", "lam", "nu")
@@ -167,8 +168,7 @@ class Integrator:
         return self.sys.kinetic(v) + self.sys.potential(q)
 
     def _converged(self, x: Array, dx: Array) -> bool:
-        n = self.sys.n
-        return float(np.abs(dx[:n]).max()) <= self.tol * self.scale
+        return float(np.abs(dx[: self._nk]).max()) <= self.tol * self.scale
 
     _full = False
     _stale_failures = 0
@@ -273,9 +273,9 @@ class Integrator:
         a = np.abs(np.where(np.isfinite(r), r, np.inf))
         i = int(np.argmax(a))
         s = self.sys
-        if i < s.n:
-            return f" (largest residual in the dynamics of {s.unknown_owner(i)})"
-        return f" (largest residual in the constraint rows of {s.row_owner(i - s.n)!r})"
+        if i < self._nk:
+            return f" (largest residual in the dynamics of {s.unknown_owner(i % s.n)})"
+        return f" (largest residual in the constraint rows of {s.row_owner(i - self._nk)!r})"
 
     def _begin(self) -> None: ...
 
@@ -300,7 +300,7 @@ class Integrator:
             return default
         x = 2.0 * hist[-1] - hist[-2]
         if len(hist) == 3:
-            n = self.sys.n
+            n = self._nk
             x[:n] = 3.0 * hist[2][:n] - 3.0 * hist[1][:n] + hist[0][:n]
         return x
 
@@ -388,11 +388,6 @@ class Midpoint(Integrator):
 class EnergyPreserving(Midpoint):
     name = "ep"
     alpha = 0.5
-
-
-class _Decaying(Midpoint):
-    name = "ed-fallback"
-    alpha = 1.0
 
 
 class GeneralizedAlpha(Integrator):
@@ -505,53 +500,187 @@ class GeneralizedAlpha(Integrator):
         self.acc, self.qdd = anew, qdd
 
 
-class EnergyDecaying(GeneralizedAlpha):
-    """Generalized-α (default ρ∞ = 0) with an energy-decay guard for conservative systems."""
+class EnergyDecaying(Integrator):
+    """Energy decaying by construction: the time-discontinuous Galerkin scheme of Bauchau &
+    Theron (1996) with linear interpolation in time, in a form whose energy balance holds for
+    any nonlinear potential, constraint and step size.
+
+    Each step has two stages: *a* just after the start (the solution may jump there) and *b*
+    at the end; the velocities v_a, v_b are the unknowns (with x = h v), linear in between:
+
+        q_b = q_i + h (v_a + v_b)/2,      q_a = q_i − h (v_b − v_a)/6,
+        h F_a = M (3 v_a + v_b − 4 v_i),  h F_b = M (v_b − 3 v_a + 2 v_i),
+
+    i.e. M(v_b − v_i) = h(F_a + F_b)/2 and M(v_a − v_i) = h(F_a − F_b)/6: the DG(1) weak form
+    with the jump at t_i⁺. The stage forces are F = f(q, v, t) + potential force + constraint
+    forces, with the potential force split around the exact discrete gradient ∇̄V and a
+    positive semidefinite stiffness K̄ (the material stiffness at the predicted midpoint, frozen
+    over the step):
+
+        P_a = −∇̄V + K̄(q_b − q_i)/2 + K̄ h(v_b − v_a)/6,   P_b = −∇̄V − K̄(q_b − q_i)/2.
+
+    For a linear system with K̄ = K these are −K q_a and −K q_b, and the scheme is the DG(1)
+    method: third order, L-stable, its amplification the (1, 2) Padé approximant of e^z. The
+    constraint forces −Ḡᵀλ (one multiplier vector for both stages, C(q_b) = 0) and −A(q_m)ᵀν
+    (A(q_m)(q_b − q_i) = 0) do no work, and the energy balance over a step is exactly
+
+        E_b − E_i = W − ½ (v_a − v_i)ᵀ M (v_a − v_i) − (h²/72) (v_b − v_a)ᵀ K̄ (v_b − v_a),
+
+    where W = (h/6)[f_a·(2v_a + v_b) + f_b·(v_a + 2v_b)] − λ·Ḡ(q_b − q_i) is the work of the
+    applied loads, dampers and drivers (the exact integral of f·v for f and v linear over the
+    step; −h/6 ∫(…) ≤ 0 for a linear damper). The last two terms, the energy of the jump,
+    are the numerical dissipation: ≥ 0 for any step, O(h⁴) per step on smooth motion (so
+    O(h³) per period), and they remove motion with ωh ≫ 1 within a few steps. First-order
+    states A ẋ = f follow the same DG(1) rule (A ẋ_a = f_a, A ẋ_b = f_b). Massless unknowns
+    (joint scalars) have no inertia to jump: their stage-a row is v_a = v_b.
+    """
 
     name = "ed"
 
-    def __init__(self, system: System, h: float, rho_inf: float = 0.0, **kw) -> None:
-        super().__init__(system, h, rho_inf=rho_inf, **kw)
-        self._fallback: _Decaying | None = None
-        self.n_scaled = 0
-        self.n_fallback = 0
+    def __init__(self, system: System, h: float, **kw) -> None:
+        super().__init__(system, h, **kw)
+        s = self.sys
+        n = s.n
+        self._nk = 2 * n
+        weight = abs(s.M).sum(axis=1).A1 + abs(s.A1).sum(axis=1).A1
+        self._massless = np.nonzero(weight == 0.0)[0]
+        self._keep = sp.diags((weight != 0.0).astype(float))
+        self._swap = sp.diags((weight == 0.0).astype(float))
+        self.dissipation = 0.0  # numerical dissipation booked so far (J)
 
-    def _solve(self) -> StepInfo:
-        if not self.conservative:
-            return super()._solve()
-        e_i = self.energy()
-        saved = (self.q, self.v, self.t, self.lam, self.nu, self.acc, self.qdd)
-        info = super()._solve()
-        if not info.converged:
-            return info
-        t_f = self.sys.kinetic(self.v)
-        v_f = self.sys.potential(self.q)
-        if t_f + v_f <= e_i:
-            return info
-        if v_f <= e_i and t_f > 0:
-            self.v = self.v * np.sqrt((e_i - v_f) / t_f)
-            self.n_scaled += 1
-            return info
-        # potential alone exceeds the previous energy: redo with the decaying α = 1 scheme
-        self.q, self.v, self.t, self.lam, self.nu, self.acc, self.qdd = saved
-        fb = self._fallback_integrator()
-        fb.q, fb.v, fb.t, fb.lam, fb.nu = self.q, self.v, self.t, self.lam, self.nu
-        info2 = fb._solve()
-        if info2.converged:
-            self.q, self.v, self.t, self.lam, self.nu = fb.q, fb.v, fb.t, fb.lam, fb.nu
-            self.acc = self.qdd = initial_accelerations(self.sys, self.q, self.v, self.t)
-            self.n_fallback += 1
-        return StepInfo(info2.converged, info.iterations + info2.iterations,
-                        info.factorizations + info2.factorizations, info2.message)
+    def _begin(self) -> None:
+        s, h = self.sys, self.h
+        self._tf = self.t + h
+        self._Mhv = s.M @ (h * self.v)
+        qm = self.q + 0.5 * h * self.v  # predicted midpoint: where K̄ is frozen for the step
+        self._Kbar = (s.block_matrix("K", s.material_stiffness_values(qm))
+                      if s.block_sizes["K"] else sp.csr_matrix((s.n, s.n)))
 
-    def _fallback_integrator(self) -> _Decaying:
-        if self._fallback is None:
-            fb = _Decaying.__new__(_Decaying)
-            fb.sys, fb.h, fb.reuse, fb.lin = self.sys, self.h, self.reuse, LinearSolver()
-            fb.scale, fb.work, fb.conservative, fb.tol = self.scale, 0.0, True, self.tol
-            fb.first, fb.mech = self.first, self.mech
-            self._fallback = fb
-        return self._fallback
+    def _start(self) -> Array:
+        hv, c = self.h * self.v, self.h * self.h
+        return np.concatenate([hv, hv, c * self.lam, c * self.nu])
+
+    def _unpack(self, x):
+        s, h = self.sys, self.h
+        n, mh = s.n, s.mh
+        xa, xb = x[:n], x[n : 2 * n]
+        dq, d = 0.5 * (xa + xb), xb - xa
+        acc = None
+        if s.accel_sets:  # the stage accelerations the rows' inertia terms imply
+            hv = h * self.v
+            acc = ((3.0 * xa + xb - 4.0 * hv) / (h * h), (xb - 3.0 * xa + 2.0 * hv) / (h * h))
+        return (xa, xb, dq, d, self.q + dq, self.q - d / 6.0, self.q + 0.5 * dq,
+                x[2 * n : 2 * n + mh], x[2 * n + mh :], acc or (None, None))
+
+    def _stage_forces(self, x):
+        """(f_a, f_b, F_a, F_b, Ḡ): applied forces and total non-constraint forces of the
+        two stages, and the discrete constraint Jacobian."""
+        s, h = self.sys, self.h
+        xa, xb, dq, d, qb, qa, _qm, _mu, _nu, acc = self._unpack(x)
+        g = s.discrete_gradient(self.q, qb)
+        kd, kdd = self._Kbar @ dq, self._Kbar @ d
+        fa = s.applied(qa, xa / h, self.t, acc[0])
+        fb = s.applied(qb, xb / h, self._tf, acc[1])
+        big_a = fa - g + 0.5 * kd + kdd / 6.0
+        big_b = fb - g - 0.5 * kd
+        gbar = s.discrete_jacobian_values(self.q, qb, self.t, self._tf)
+        return fa, fb, big_a, big_b, gbar
+
+    def _rows(self, x):
+        """The momentum rows of both stages (h² times force units), the constraint rows, and
+        the stage-a rows of the massless unknowns as the momentum balance would have them."""
+        s, h = self.sys, self.h
+        xa, xb, dq, d, qb, _qa, qm, mu, nu, _acc = self._unpack(x)
+        _, _, big_a, big_b, gbar = self._stage_forces(x)
+        h2 = h * h
+        cf = s.gmul_T(gbar, mu)
+        ra = s.M @ (3.0 * xa + xb) - 4.0 * self._Mhv - h2 * big_a + cf
+        rb = s.M @ (xb - 3.0 * xa) + 2.0 * self._Mhv - h2 * big_b + cf
+        if len(self.first):
+            ra += h * (s.A1 @ xa)
+            rb += h * (s.A1 @ xb)
+        parts = [ra, rb, s.constraint(qb, self._tf)]
+        if s.mn:
+            am = s.nonholonomic_values(qm)
+            an = s.amul_T(am, nu)
+            ra += an
+            rb += an
+            parts.append(s.amul(am, dq))
+        # a massless unknown has no inertia to jump: its stage-a row is v_a = v_b (the
+        # force balance there would repeat stage b's, or, for a prescribed body, is the
+        # driver's business)
+        unbalanced = ra[self._massless].copy()
+        ra[self._massless] = d[self._massless]
+        return parts, unbalanced
+
+    def _residual(self, x):
+        return np.concatenate(self._rows(x)[0])
+
+    def _jacobian(self, x) -> sp.csc_matrix:
+        s, h = self.sys, self.h
+        n = s.n
+        xa, xb, dq, _d, qb, qa, qm, mu, _nu, acc = self._unpack(x)
+        block = s.block_matrix
+        zero = sp.csr_matrix((n, n))
+        k = block("K", s.stiffness_values(qm)) if s.block_sizes["K"] else zero
+        kb = self._Kbar
+        m, a1 = s.M, s.A1
+        jac = {"a": zero, "b": zero}
+        dqa = dva = dqb = dvb = zero
+        if s.block_sizes["Dq"] or s.block_sizes["Dv"]:
+            jq, jv = s.applied_jacobians(qa, xa / h, self.t, acc[0])
+            dqa, dva = block("Dq", jq), block("Dv", jv)
+            jq, jv = s.applied_jacobians(qb, xb / h, self._tf, acc[1])
+            dqb, dvb = block("Dq", jq), block("Dv", jv)
+        if s.block_sizes["Da"]:  # added masses: inertia like M in each stage's row
+            jac["a"] = block("Da", s.acceleration_jacobian(qa, xa / h, self.t, acc[0]))
+            jac["b"] = block("Da", s.acceleration_jacobian(qb, xb / h, self._tf, acc[1]))
+        hs = (0.25 * block("H", s.hessian_values(qm, self.t + 0.5 * h, mu))
+              if s.block_sizes["H"] else zero)
+        h2 = h * h
+        pot_b = -0.25 * (k + kb)
+        ma, mb = m - jac["a"], m - jac["b"]
+        jaa = 3.0 * ma + h * a1 - h2 * (-0.25 * k + kb / 12.0 + dqa / 6.0 + dva / h)
+        jab = ma - h2 * (-0.25 * k + 5.0 * kb / 12.0 - dqa / 6.0)
+        jba = -3.0 * mb - h2 * (pot_b + 0.5 * dqb)
+        jbb = mb + h * a1 - h2 * (pot_b + 0.5 * dqb + dvb / h)
+        keep, swap = self._keep, self._swap
+        rows = [[keep @ (jaa + hs) - swap, keep @ (jab + hs) + swap], [jba + hs, jbb + hs]]
+        if s.mh:
+            gt = block("G", s.discrete_jacobian_values(self.q, qb, self.t, self._tf)).T
+            rows[0].append(keep @ gt)
+            rows[1].append(gt)
+            half = 0.5 * block("G", s.jacobian_values(qb, self._tf))
+            rows.append([half, half, None])
+        if s.mn:
+            am = block("A", s.nonholonomic_values(qm))
+            rows[0].append(keep @ am.T)
+            rows[1].append(am.T)
+            for r in rows[2:]:
+                r.append(None)
+            da = 0.5 * am + 0.25 * block("A", s.nonholonomic_derivative(qm, dq))
+            rows.append([da, da] + [None] * (len(rows[0]) - 2))
+        return sp.bmat(rows, format="csc")
+
+    def _finish(self, x):
+        s, h = self.sys, self.h
+        xa, xb, dq, d, qb, _qa, _qm, mu, nu, _acc = self._unpack(x)
+        fa, fb, _, _, gbar = self._stage_forces(x)
+        va, vb = xa / h, xb / h
+        lam = mu / (h * h)
+        mech = self.mech
+        applied = (h / 6.0) * float(fa[mech] @ (2.0 * va + vb)[mech]
+                                    + fb[mech] @ (va + 2.0 * vb)[mech])
+        # the stage-a force left on massless unknowns (a prescribed body's: the driver's)
+        # works on them; the momentum rows that hold elsewhere account for all the rest
+        _, unbalanced = self._rows(x)
+        w = self._massless
+        massless = float(unbalanced @ (2.0 * xa[w] + xb[w])) / (6.0 * h * h)
+        self.work += applied - float(lam @ s.gmul(gbar, dq)) + massless
+        jump = va - self.v
+        jump[~mech] = 0.0
+        self.dissipation += 0.5 * float(jump @ (s.M @ jump)) + float(d @ (self._Kbar @ d)) / 72.0
+        self.q, self.v, self.t, self.lam, self.nu = qb, vb, self._tf, lam, nu / (h * h)
 
 
 SCHEMES = {"ep": EnergyPreserving, "ed": EnergyDecaying, "galpha": GeneralizedAlpha}
@@ -559,11 +688,15 @@ SCHEMES = {"ep": EnergyPreserving, "ed": EnergyDecaying, "galpha": GeneralizedAl
 
 def make_integrator(system: System, scheme: str, h: float, rho_inf: float | None = None,
                     **kw) -> Integrator:
-    """Integrator by name: ``ep``, ``ed`` (ρ∞ default 0) or ``galpha`` (ρ∞ default 0.8)."""
+    """Integrator by name: ``ep``, ``ed`` or ``galpha`` (ρ∞ default 0.8; ρ∞ = 0 is the
+    dissipative generalized-α that ``ed`` was before it decayed by construction)."""
     if scheme not in SCHEMES:
         raise ValueError(f"scheme = {scheme!r}: must be one of {', '.join(SCHEMES)}")
     cls = SCHEMES[scheme]
-    if scheme == "ep":
+    if scheme != "galpha":
+        if rho_inf is not None:
+            raise ValueError(f"rho_inf = {rho_inf!r} applies to the galpha scheme only ({scheme} "
+                             "has no free spectral radius)")
         return cls(system, h, **kw)
     if rho_inf is None:
         return cls(system, h, **kw)

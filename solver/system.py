@@ -188,6 +188,7 @@ class System:
             "A": (n + self.A_rows, self.A_cols),
         }
         self.block_sizes = {k: len(r) for k, (r, _) in pattern.items()}
+        self._patterns = pattern
         rows = cat([pattern[k][0] for k in BLOCKS])
         cols = cat([pattern[k][1] for k in BLOCKS])
         N = n + self.m
@@ -234,6 +235,22 @@ class System:
 
     def stiffness_values(self, q: Array) -> Array:
         return _cat([s.stiffness(q) for s in self.stiff_sets], float)
+
+    def material_stiffness_values(self, q: Array) -> Array:
+        """A positive semidefinite part of the potential's Hessian in the K block (what the
+        ``ed`` scheme's numerical dissipation is measured in)."""
+        return _cat([s.material_stiffness(q) for s in self.stiff_sets], float)
+
+    def block_matrix(self, name: str, vals: Array) -> sp.csr_matrix:
+        """One named block of the Newton matrix alone, as a sparse matrix: n × n for the
+        coordinate blocks (M, A1, K, Dq, Dv, Da, H), mh × n for G, mn × n for A."""
+        rows, cols = self._patterns[name]
+        shape = (self.n, self.n)
+        if name == "G":
+            rows, shape = rows - self.n, (self.mh, self.n)
+        elif name == "A":
+            rows, shape = rows - self.n - self.mh, (self.mn, self.n)
+        return sp.csr_matrix((vals, (rows, cols)), shape=shape)
 
     def applied(self, q: Array, v: Array, t: float, a: Array | None = None) -> Array:
         """Generalized forces of dampers, loads and first-order right-hand sides; ``a`` (the
