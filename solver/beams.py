@@ -379,26 +379,44 @@ class BeamSet(ElementSet):
         qm = self._element_vectors(0.5 * (qi + qf))
         return self._force(qm, self._stress(0.5 * (ei + ef)))
 
-    def _material(self, qe: Array) -> Array:
+    def _material(self, qe: Array, qe_right: Array | None = None) -> Array:
         """Material stiffness Σ_g Bᵀ wC B per element (E, 48, 48), with B = h Q in the padded
-        slots (E · width, 6, 48): positive semidefinite."""
+        slots (E · width, 6, 48): positive semidefinite. With ``qe_right``, Σ_g B(Q)ᵀ wC
+        B(Q_right)."""
         n_el = len(qe)
-        b = (self._hp.reshape(n_el, -1, 16, 16) @ qe[:, None]).reshape(-1, 6, 48)
-        cb = self._wCp @ b
+
+        def strain_matrices(x: Array) -> Array:
+            return (self._hp.reshape(n_el, -1, 16, 16) @ x[:, None]).reshape(-1, 6, 48)
+
+        b = strain_matrices(qe)
+        cb = self._wCp @ (b if qe_right is None else strain_matrices(qe_right))
         return np.swapaxes(b.reshape(n_el, -1, 48), 1, 2) @ cb.reshape(n_el, -1, 48)
+
+    def _with_geometric(self, k: Array, stress: Array) -> Array:
+        """k (E, 48, 48) plus the geometric stiffness of ``stress``: (Σ_k w S_k h_k) ⊗ I3."""
+        hs = self._stress_matrices(stress)
+        kv = k.reshape(len(k), 16, 3, 16, 3)
+        for c in range(3):
+            kv[:, :, c, :, c] += hs
+        return k.ravel()
 
     def material_stiffness(self, q):
         return self._material(self._element_vectors(q)).ravel()
 
     def stiffness(self, q):
         qe, e = self._strains(q)
-        n_el = len(qe)
-        k = self._material(qe)
-        hs = self._stress_matrices(self._stress(e))  # geometric part: hs ⊗ I3
-        kv = k.reshape(n_el, 16, 3, 16, 3)
-        for c in range(3):
-            kv[:, :, c, :, c] += hs
-        return k.ravel()
+        return self._with_geometric(self._material(qe), self._stress(e))
+
+    def discrete_stiffness(self, qi, qf):
+        # ∂/∂q_f of B(q_m)ᵀ C (e_i + e_f)/2: ½ the geometric stiffness of the mean stress plus
+        # ½ B(q_m)ᵀ C B(q_f). The midpoint Hessian instead would take the stress at q_m, which
+        # differs by C times the strain's second difference: for a blade turning a few degrees
+        # per step, more than the centrifugal tension itself.
+        _, ei = self._strains(qi)
+        _, ef = self._strains(qf)
+        qm = self._element_vectors(0.5 * (qi + qf))
+        k = 0.5 * self._material(qm, self._element_vectors(qf))
+        return self._with_geometric(k, 0.25 * self._stress(ei + ef))
 
 
 Beam.set_class = BeamSet

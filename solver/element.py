@@ -136,6 +136,12 @@ class ElementSet:
     def stiffness(self, q: Array) -> Array:
         return EMPTY_F
 
+    def discrete_stiffness(self, qi: Array, qf: Array) -> Array:
+        """∂(∇̄V(q_i, q_f))/∂q_f at ``(stiff_rows, stiff_cols)``: the Newton tangent of the
+        discrete gradient; by default half the Hessian at the midpoint (sets whose discrete
+        gradient moves far from that over a step override it)."""
+        return 0.5 * self.stiffness(0.5 * (qi + qf))
+
     def material_stiffness(self, q: Array) -> Array:
         """A positive semidefinite part of the Hessian at ``(stiff_rows, stiff_cols)``: the
         material part BᵀCB of a strain energy ½εᵀCε (without the geometric part, which has no

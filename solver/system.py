@@ -236,6 +236,10 @@ class System:
     def stiffness_values(self, q: Array) -> Array:
         return _cat([s.stiffness(q) for s in self.stiff_sets], float)
 
+    def discrete_stiffness_values(self, qi: Array, qf: Array) -> Array:
+        """∂(∇̄V(q_i, q_f))/∂q_f in the K block."""
+        return _cat([s.discrete_stiffness(qi, qf) for s in self.stiff_sets], float)
+
     def material_stiffness_values(self, q: Array) -> Array:
         """A positive semidefinite part of the potential's Hessian in the K block (what the
         ``ed`` scheme's numerical dissipation is measured in)."""
