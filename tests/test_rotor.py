@@ -65,9 +65,11 @@ def test_swashplate_pitch_and_derivatives():
                                            rel=1e-6)
 
 
-def isolated_rotor_thrust(flight_speed: float, steps_per_rev: int = 96, revolutions: int = 4):
+def isolated_rotor_thrust(flight_speed: float, steps_per_rev: int = 96, revolutions: int = 4,
+                          scheme: str = "ed"):
     """Mean thrust (N) and mean inflow ratio of the last revolution of the isolated rotor at
-    the standard controls (collective only in hover)."""
+    the standard controls (collective only in hover), integrated with ``scheme`` (``galpha``:
+    ρ∞ = 0)."""
     kw = {"flight_speed": flight_speed}
     if flight_speed == 0:
         kw.update(cyclic_sine=0.0, cyclic_cosine=0.0)
@@ -84,7 +86,8 @@ def isolated_rotor_thrust(flight_speed: float, steps_per_rev: int = 96, revoluti
         blade, _ = add_blade(model, hub, k, p, damping_factor=10.0)  # lag transient short
         lines.append(model.add(airloads(blade, k, p, flight, inflow)))
     system = System(model)
-    integ = make_integrator(system, "ed", 2 * np.pi / OMEGA / steps_per_rev, tol=1e-10)
+    integ = make_integrator(system, scheme, 2 * np.pi / OMEGA / steps_per_rev, tol=1e-10,
+                            rho_inf=0.0 if scheme == "galpha" else None)
     line_set = _line_set(system, lines[0])
     o = system.offset[inflow]
     rec = []
@@ -114,7 +117,9 @@ def test_hover_thrust_and_momentum_inflow():
 
 @pytest.mark.slow
 def test_forward_flight_thrust_and_glauert_inflow():
-    thrust, lam, p = isolated_rotor_thrust(SPEED)
+    # generalized-α ρ∞ = 0: the DG(1) ed diverges in forward flight after some revolutions
+    # (Newton matrix not finite; issue 11 stays open on it)
+    thrust, lam, p = isolated_rotor_thrust(SPEED, scheme="galpha")
     ct = _ct(thrust, p)
     mu = SPEED * math.cos(math.radians(3.0)) / (OMEGA * UH60A.radius)
     lam_f = SPEED * math.sin(math.radians(3.0)) / (OMEGA * UH60A.radius)
