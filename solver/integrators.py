@@ -319,10 +319,10 @@ class Integrator:
         return float(np.abs(c).max()) if c.size else 0.0
 
 
-class Midpoint(Integrator):
-    """The α-family Δq = h[(1−α)v_i + αv_f], MΔv = −h F̄: α = ½ is the EP scheme, α = 1 the
-    provably decaying fallback of the ED scheme (E_f − E_i = −(α − ½)ΔvᵀMΔv). First-order
-    states: A Δx = h f at the midpoint."""
+class EnergyPreserving(Integrator):
+    """Midpoint kinematics Δq = h(v_i + v_f)/2 with MΔv = −h F̄ (discrete-gradient forces):
+    E_f − E_i is exactly the work done. First-order states: A Δx = h f at the midpoint.
+    (``alpha`` is the midpoint weight ½ in Δq = h[(1−α)v_i + αv_f].)"""
 
     name = "ep"
     alpha = 0.5
@@ -384,11 +384,6 @@ class Midpoint(Integrator):
         lam = mu / c
         self._book_work(lam, gbar, dq, s.applied(qm, dq / h, self._tm, self._acc(dq)))
         self.q, self.v, self.t, self.lam, self.nu = qf, vf, self._tf, lam, nu / c
-
-
-class EnergyPreserving(Midpoint):
-    name = "ep"
-    alpha = 0.5
 
 
 class GeneralizedAlpha(Integrator):
@@ -586,30 +581,22 @@ class EnergyDecaying(Integrator):
         return (xa, xb, dq, d, self.q + dq, self.q - d / 6.0, self.q + 0.5 * dq,
                 x[2 * n : 2 * n + mh], x[2 * n + mh :], acc or (None, None))
 
-    def _stage_forces(self, x):
-        """(f_a, f_b, F_a, F_b, Ḡ): applied forces and total non-constraint forces of the
-        two stages, and the discrete constraint Jacobian."""
+    def _rows(self, x):
+        """The momentum rows of both stages (h² times force units) and the constraint rows;
+        the stage-a rows of the massless unknowns as the momentum balance would have them;
+        the applied forces f_a, f_b and the discrete constraint Jacobian Ḡ."""
         s, h = self.sys, self.h
-        xa, xb, dq, d, qb, qa, _qm, _mu, _nu, acc = self._unpack(x)
+        xa, xb, dq, d, qb, qa, qm, mu, nu, acc = self._unpack(x)
+        # stage forces without the constraints: applied, and the split elastic force
         g = s.discrete_gradient(self.q, qb)
         kd, kdd = self._Kbar @ dq, self._Kbar @ d
         fa = s.applied(qa, xa / h, self.t, acc[0])
         fb = s.applied(qb, xb / h, self._tf, acc[1])
-        big_a = fa - g + 0.5 * kd + kdd / 6.0
-        big_b = fb - g - 0.5 * kd
         gbar = s.discrete_jacobian_values(self.q, qb, self.t, self._tf)
-        return fa, fb, big_a, big_b, gbar
-
-    def _rows(self, x):
-        """The momentum rows of both stages (h² times force units), the constraint rows, and
-        the stage-a rows of the massless unknowns as the momentum balance would have them."""
-        s, h = self.sys, self.h
-        xa, xb, dq, d, qb, _qa, qm, mu, nu, _acc = self._unpack(x)
-        _, _, big_a, big_b, gbar = self._stage_forces(x)
         h2 = h * h
         cf = s.gmul_T(gbar, mu)
-        ra = s.M @ (3.0 * xa + xb) - 4.0 * self._Mhv - h2 * big_a + cf
-        rb = s.M @ (xb - 3.0 * xa) + 2.0 * self._Mhv - h2 * big_b + cf
+        ra = s.M @ (3.0 * xa + xb) - 4.0 * self._Mhv - h2 * (fa - g + 0.5 * kd + kdd / 6.0) + cf
+        rb = s.M @ (xb - 3.0 * xa) + 2.0 * self._Mhv - h2 * (fb - g - 0.5 * kd) + cf
         if len(self.first):
             ra += h * (s.A1 @ xa)
             rb += h * (s.A1 @ xb)
@@ -625,7 +612,7 @@ class EnergyDecaying(Integrator):
         # driver's business)
         unbalanced = ra[self._massless].copy()
         ra[self._massless] = d[self._massless]
-        return parts, unbalanced
+        return parts, unbalanced, (fa, fb, gbar)
 
     def _residual(self, x):
         return np.concatenate(self._rows(x)[0])
@@ -636,28 +623,26 @@ class EnergyDecaying(Integrator):
         xa, xb, dq, _d, qb, qa, qm, mu, _nu, acc = self._unpack(x)
         block = s.block_matrix
         zero = sp.csr_matrix((n, n))
-        # ∂∇̄V/∂x_a = ∂∇̄V/∂x_b = ½ ∂∇̄V/∂q_b
-        k = (2.0 * block("K", s.discrete_stiffness_values(self.q, qb)) if s.block_sizes["K"]
-             else zero)
+        # ∂∇̄V/∂x_a = ∂∇̄V/∂x_b = ½ ∂∇̄V/∂q_b =: kd/2
+        kd = block("K", s.discrete_stiffness_values(self.q, qb)) if s.block_sizes["K"] else zero
         kb = self._Kbar
         m, a1 = s.M, s.A1
-        jac = {"a": zero, "b": zero}
-        dqa = dva = dqb = dvb = zero
+        dqa = dva = dqb = dvb = da_a = da_b = zero
         if s.block_sizes["Dq"] or s.block_sizes["Dv"]:
             jq, jv = s.applied_jacobians(qa, xa / h, self.t, acc[0])
             dqa, dva = block("Dq", jq), block("Dv", jv)
             jq, jv = s.applied_jacobians(qb, xb / h, self._tf, acc[1])
             dqb, dvb = block("Dq", jq), block("Dv", jv)
         if s.block_sizes["Da"]:  # added masses: inertia like M in each stage's row
-            jac["a"] = block("Da", s.acceleration_jacobian(qa, xa / h, self.t, acc[0]))
-            jac["b"] = block("Da", s.acceleration_jacobian(qb, xb / h, self._tf, acc[1]))
+            da_a = block("Da", s.acceleration_jacobian(qa, xa / h, self.t, acc[0]))
+            da_b = block("Da", s.acceleration_jacobian(qb, xb / h, self._tf, acc[1]))
         hs = (0.25 * block("H", s.hessian_values(qm, self.t + 0.5 * h, mu))
               if s.block_sizes["H"] else zero)
         h2 = h * h
-        pot_b = -0.25 * (k + kb)
-        ma, mb = m - jac["a"], m - jac["b"]
-        jaa = 3.0 * ma + h * a1 - h2 * (-0.25 * k + kb / 12.0 + dqa / 6.0 + dva / h)
-        jab = ma - h2 * (-0.25 * k + 5.0 * kb / 12.0 - dqa / 6.0)
+        pot_b = -0.5 * kd - 0.25 * kb
+        ma, mb = m - da_a, m - da_b
+        jaa = 3.0 * ma + h * a1 - h2 * (-0.5 * kd + kb / 12.0 + dqa / 6.0 + dva / h)
+        jab = ma - h2 * (-0.5 * kd + 5.0 * kb / 12.0 - dqa / 6.0)
         jba = -3.0 * mb - h2 * (pot_b + 0.5 * dqb)
         jbb = mb + h * a1 - h2 * (pot_b + 0.5 * dqb + dvb / h)
         keep, swap = self._keep, self._swap
@@ -681,7 +666,7 @@ class EnergyDecaying(Integrator):
     def _finish(self, x):
         s, h = self.sys, self.h
         xa, xb, dq, d, qb, _qa, _qm, mu, nu, _acc = self._unpack(x)
-        fa, fb, _, _, gbar = self._stage_forces(x)
+        _, unbalanced, (fa, fb, gbar) = self._rows(x)
         va, vb = xa / h, xb / h
         lam = mu / (h * h)
         mech = self.mech
@@ -689,7 +674,6 @@ class EnergyDecaying(Integrator):
                                     + fb[mech] @ (va + 2.0 * vb)[mech])
         # the stage-a force left on massless unknowns (a prescribed body's: the driver's)
         # works on them; the momentum rows that hold elsewhere account for all the rest
-        _, unbalanced = self._rows(x)
         w = self._massless
         massless = float(unbalanced @ (2.0 * xa[w] + xb[w])) / (6.0 * h * h)
         self.work += applied - float(lam @ s.gmul(gbar, dq)) + massless
