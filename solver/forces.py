@@ -301,9 +301,9 @@ class RelativeRotationSet(ElementSet):
         if e0.damping != 0.0 or self._fb:
             self.force_idx = flat
             self.fv_rows, self.fv_cols = pr, pc
+            self.fq_rows, self.fq_cols = pr, pc
             self.nonconservative = True
         if self._fb:
-            self.fq_rows, self.fq_cols = pr, pc
             self.a = np.array([e.delayed_stiffness for e in elements])
             self.b = np.array([e.delayed_damping for e in elements])
             self.tau = np.array([e.delay for e in elements])
@@ -340,8 +340,9 @@ class RelativeRotationSet(ElementSet):
                           + self.b[j] * (rate[j] - np.interp(td, self._ht, self._hrate[:, j])))
         return moment
 
-    def _phi_grad(self, q):
-        """φ (J,) unwrapped against the last converged step, and ∂φ/∂q at ``idx`` (J, k)."""
+    def _bilinear(self, q):
+        """c = e1ᵃ·e1ᵇ and s = −e1ᵃ·e2ᵇ (J,), bilinear in the directors, and their gradients
+        over ``idx`` (J, k): body a's active directors, then body b's."""
         nj = len(self.k)
         ab = self._ab
         db = q[self.idx[:, -self._nb :]].reshape(nj, len(ab), 3)  # active directors of b
@@ -356,19 +357,48 @@ class RelativeRotationSet(ElementSet):
             ea = np.einsum("ja,jai->ji", ca1, da)
         c = np.einsum("ji,ji->j", ea, eb1)
         s = -np.einsum("ji,ji->j", ea, eb2)
-        # gradients over body a's directors, then body b's
-        r2 = (c * c + s * s)[:, None, None]
-        gb = ((c[:, None, None] * -cb2[:, :, None] - s[:, None, None] * cb1[:, :, None])
-              * ea[:, None, :] / r2).reshape(nj, -1)
-        if self.grounded:
-            g = gb
-        else:
-            ga = (ca1[:, :, None] * (c[:, None, None] * -eb2[:, None, :]
-                                     - s[:, None, None] * eb1[:, None, :]) / r2).reshape(nj, -1)
-            g = np.concatenate([ga, gb], axis=1)
+        dc = (cb1[:, :, None] * ea[:, None, :]).reshape(nj, -1)
+        ds = (-cb2[:, :, None] * ea[:, None, :]).reshape(nj, -1)
+        if not self.grounded:
+            dc = np.concatenate([(ca1[:, :, None] * eb1[:, None, :]).reshape(nj, -1), dc], 1)
+            ds = np.concatenate([(-ca1[:, :, None] * eb2[:, None, :]).reshape(nj, -1), ds], 1)
+        return c, s, dc, ds
+
+    def _angle(self, c, s):
+        """φ = atan2(s, c), unwrapped against the last converged step."""
         phi = np.arctan2(s, c)
-        phi = self._ref + np.angle(np.exp(1j * (phi - self._ref)))
-        return phi, g
+        return self._ref + np.angle(np.exp(1j * (phi - self._ref)))
+
+    def _phi_grad(self, q):
+        """φ (J,) unwrapped against the last converged step, and ∇φ = (c∇s − s∇c)/r² at
+        ``idx`` (J, k)."""
+        c, s, dc, ds = self._bilinear(q)
+        g = (c[:, None] * ds - s[:, None] * dc) / (c * c + s * s)[:, None]
+        return self._angle(c, s), g
+
+    def _phi_hessian(self, q):
+        """φ, ∇φ (J, k) and the Hessian ∇²φ (J, k, k) over ``idx``: with ∂²c/∂dᵃ_α∂dᵇ_β =
+        ca_α cb1_β I3 (and likewise s with −cb2),
+        ∇²φ = [∇s∇cᵀ − ∇c∇sᵀ + c∇²s − s∇²c − 2∇φ(c∇c + s∇s)ᵀ]/r², r² = c² + s²."""
+        c, s, dc, ds = self._bilinear(q)
+        nj, k = dc.shape
+        hc = np.zeros((nj, k, k))
+        hs = np.zeros((nj, k, k))
+        if not self.grounded:
+            ca1, ab = self._ca1[:, self._aa], self._ab
+            na = 3 * len(self._aa)
+            eye = np.eye(3)
+            for h_, cb in ((hc, self._cb1[:, ab]), (hs, -self._cb2[:, ab])):
+                x = np.einsum("ja,jb,ik->jaibk", ca1, cb, eye).reshape(nj, na, -1)
+                h_[:, :na, na:] = x
+                h_[:, na:, :na] = np.swapaxes(x, 1, 2)
+        r2 = c * c + s * s
+        g = (c[:, None] * ds - s[:, None] * dc) / r2[:, None]
+        outer = ds[:, :, None] * dc[:, None, :] - dc[:, :, None] * ds[:, None, :]
+        w = c[:, None] * dc + s[:, None] * ds
+        hess = (outer + c[:, None, None] * hs - s[:, None, None] * hc
+                - 2.0 * g[:, :, None] * w[:, None, :]) / r2[:, None, None]
+        return self._angle(c, s), g, hess
 
     def _energies(self, q):
         phi, g = self._phi_grad(q)
@@ -400,14 +430,24 @@ class RelativeRotationSet(ElementSet):
         return (moment[:, None] * g).ravel()
 
     def force_jacobians(self, q, v, t):
-        _, g = self._phi_grad(q)
+        # f = m ∇φ with m = −c φ̇ (+ feedback), φ̇ = ∇φ·v: ∂f/∂v = −(c + b) ∇φ∇φᵀ and
+        # ∂f/∂q = ∇φ (∂m/∂q)ᵀ + m ∇²φ, ∂m/∂q = −(c + b) ∇²φ v − a ∇φ. (The moment's
+        # rotation with the bodies matters in a rotating frame: leaving it out cost a
+        # rotor's Newton its convergence.)
+        phi, g, hess = self._phi_hessian(q)
+        rate = np.einsum("jk,jk->j", g, v[self.idx])
+        damp, stiff = self.c.copy(), np.zeros(len(self.c))
+        moment = -self.c * rate
+        if self._fb:
+            on = self._reached(t)  # the feedback's own terms only where it acts
+            damp += on * self.b
+            stiff += on * self.a
+            moment += self._feedback(t, phi, rate)
         ggt = g[:, :, None] * g[:, None, :]
-        # (the terms of ∂g/∂q times the moment are left out, as for the plain damper)
-        if not self._fb:
-            return np.zeros(0), (-self.c[:, None, None] * ggt).ravel()
-        on = self._reached(t)  # the feedback's own terms only where it acts
-        fv = (-(self.c + on * self.b)[:, None, None] * ggt).ravel()
-        return (-(on * self.a)[:, None, None] * ggt).ravel(), fv
+        hv = np.einsum("jkl,jl->jk", hess, v[self.idx])
+        fq = (-damp[:, None, None] * g[:, :, None] * hv[:, None, :]
+              - stiff[:, None, None] * ggt + moment[:, None, None] * hess)
+        return fq.ravel(), (-damp[:, None, None] * ggt).ravel()
 
 
 def _active(*coefs: Array) -> NDArray[np.int64]:

@@ -887,6 +887,39 @@ def test_singular_models_fail_cleanly(kind, scheme):
     assert "singular" in sim.message or "redundant" in sim.message, sim.message
 
 
+# ------------------------------------------------------------------ rotational damper tangent
+@pytest.mark.parametrize("grounded", [True, False])
+def test_rotational_damper_jacobians_match_finite_differences(grounded):
+    """f = −c φ̇ ∇φ: ∂f/∂q holds the moment's turn with the bodies (m ∇²φ) and the rate's
+    (∇φ (∇²φ v)ᵀ) — what a spinning rotor's lag damper needs for Newton to converge."""
+    rng = np.random.default_rng(3)
+    a = RigidBody("a", 1.0, inertia=(1, 2, 3), orientation=_rot((1, 2, 3), 0.3))
+    b = RigidBody("b", 1.0, inertia=(1, 2, 3), position=(0.3, 0.1, 0),
+                  orientation=_rot((3, 1, 2), 0.7))
+    mod = Model()
+    mod.add(ground(), a, b, RelativeRotation("r", None if grounded else a, b,
+                                             axis=(0.2, 0.3, 1.0), damping=2.0))
+    s = System(mod)
+    st = next(x for x in s.sets if len(x.fq_rows))
+    q = s.q0_raw + 0.05 * rng.standard_normal(s.n)
+    v = rng.standard_normal(s.n)
+    jq, jv = st.force_jacobians(q, v, 0.0)
+    nj, k = st.idx.shape
+    fd_q, fd_v = np.zeros((nj, k, k)), np.zeros((nj, k, k))
+    for c in range(k):
+        for x, out in ((q, fd_q), (v, fd_v)):
+            e = 1e-6
+            xp, xm = x.copy(), x.copy()
+            xp[st.idx[:, c]] += e
+            xm[st.idx[:, c]] -= e
+            args = ((xp, v), (xm, v)) if x is q else ((q, xp), (q, xm))
+            fp, fm = (st.force(*arg, 0.0).reshape(nj, k) for arg in args)
+            out[:, :, c] = (fp - fm) / (2 * e)
+    # measured ≤ 8e-10 against entries up to 5 (central differences' truncation)
+    assert np.abs(jq.reshape(nj, k, k) - fd_q).max() <= 1e-7 * np.abs(fd_q).max()
+    assert np.abs(jv.reshape(nj, k, k) - fd_v).max() <= 1e-7 * np.abs(fd_v).max()
+
+
 # ------------------------------------------------------------------ delayed feedback damping
 def _feedback_oscillator(moment: float, feedback: bool, spin: float = 0.0):
     """Disc on a revolute, J φ̈ + c φ̇ + k φ = M cos Ωt (τ = 2π/Ω = 1 s), ω0 = 0.27 Ω and 1 %
