@@ -552,8 +552,8 @@ class EnergyDecaying(Integrator):
         self._nk = 2 * n
         weight = abs(s.M).sum(axis=1).A1 + abs(s.A1).sum(axis=1).A1
         self._massless = np.nonzero(weight == 0.0)[0]
-        self._keep = sp.diags((weight != 0.0).astype(float))
-        self._swap = sp.diags((weight == 0.0).astype(float))
+        self._keep_rows = (weight != 0.0).astype(float)
+        self._scatter = None  # the Newton matrix's CSC pattern, from the first assembly
         self.dissipation = 0.0  # numerical dissipation booked so far (J)
         self.qdd = self._qdd0 if self._qdd0 is not None else np.zeros(system.n)
 
@@ -562,8 +562,9 @@ class EnergyDecaying(Integrator):
         self._tf = self.t + h
         self._Mhv = s.M @ (h * self.v)
         qm = self.q + 0.5 * h * self.v  # predicted midpoint: where K̄ is frozen for the step
-        self._Kbar = (s.block_matrix("K", s.material_stiffness_values(qm))
-                      if s.block_sizes["K"] else sp.csr_matrix((s.n, s.n)))
+        self._Kbar_vals = s.material_stiffness_values(qm)
+        self._Kbar = (s.block_matrix("K", self._Kbar_vals) if s.block_sizes["K"]
+                      else sp.csr_matrix((s.n, s.n)))
 
     def _start(self) -> Array:
         hv, c = self.h * self.v, self.h * self.h
@@ -618,50 +619,80 @@ class EnergyDecaying(Integrator):
         return np.concatenate(self._rows(x)[0])
 
     def _jacobian(self, x) -> sp.csc_matrix:
+        """The Newton matrix in one sparse assembly: every block's values, weighted for each
+        of its places (rows a, b × columns x_a, x_b; the multiplier columns; the constraint
+        rows), as one list of triplets. Stage-a rows of massless unknowns are v_a = v_b."""
         s, h = self.sys, self.h
-        n = s.n
+        n, mh = s.n, s.mh
         xa, xb, dq, _d, qb, qa, qm, mu, _nu, acc = self._unpack(x)
-        block = s.block_matrix
-        zero = sp.csr_matrix((n, n))
-        # ∂∇̄V/∂x_a = ∂∇̄V/∂x_b = ½ ∂∇̄V/∂q_b =: kd/2
-        kd = block("K", s.discrete_stiffness_values(self.q, qb)) if s.block_sizes["K"] else zero
-        kb = self._Kbar
-        m, a1 = s.M, s.A1
-        dqa = dva = dqb = dvb = da_a = da_b = zero
+        h2 = h * h
+        keep = self._keep_rows
+        parts: list[tuple[Array, Array, Array]] = []
+
+        def put(name: str, vals: Array, places) -> None:
+            """Add block ``name`` with ``vals`` at (row offset, column offset, weight) places;
+            in the stage-a rows (offset 0) the massless unknowns' rows are left out."""
+            rows, cols = s.block_pattern(name)
+            for r0, c0, w in places:
+                v = w * vals
+                if r0 == 0:
+                    v = v * keep[rows]
+                parts.append((rows + r0, cols + c0, v))
+
+        # ∂∇̄V/∂x_a = ∂∇̄V/∂x_b = ½ ∂∇̄V/∂q_b; q_a = q_i − (x_b − x_a)/6, q_b = q_i + (x_a + x_b)/2
+        put("M", s.M_vals, [(0, 0, 3.0), (0, n, 1.0), (n, 0, -3.0), (n, n, 1.0)])
+        if len(self.first):
+            put("A1", s.A1_vals, [(0, 0, h), (n, n, h)])
+        if s.block_sizes["K"]:
+            put("K", s.discrete_stiffness_values(self.q, qb),
+                [(0, 0, 0.5 * h2), (0, n, 0.5 * h2), (n, 0, 0.5 * h2), (n, n, 0.5 * h2)])
+            put("K", self._Kbar_vals, [(0, 0, -h2 / 12.0), (0, n, -5.0 * h2 / 12.0),
+                                       (n, 0, 0.25 * h2), (n, n, 0.25 * h2)])
         if s.block_sizes["Dq"] or s.block_sizes["Dv"]:
             jq, jv = s.applied_jacobians(qa, xa / h, self.t, acc[0])
-            dqa, dva = block("Dq", jq), block("Dv", jv)
+            put("Dq", jq, [(0, 0, -h2 / 6.0), (0, n, h2 / 6.0)])
+            put("Dv", jv, [(0, 0, -h)])
             jq, jv = s.applied_jacobians(qb, xb / h, self._tf, acc[1])
-            dqb, dvb = block("Dq", jq), block("Dv", jv)
+            put("Dq", jq, [(n, 0, -0.5 * h2), (n, n, -0.5 * h2)])
+            put("Dv", jv, [(n, n, -h)])
         if s.block_sizes["Da"]:  # added masses: inertia like M in each stage's row
-            da_a = block("Da", s.acceleration_jacobian(qa, xa / h, self.t, acc[0]))
-            da_b = block("Da", s.acceleration_jacobian(qb, xb / h, self._tf, acc[1]))
-        hs = (0.25 * block("H", s.hessian_values(qm, self.t + 0.5 * h, mu))
-              if s.block_sizes["H"] else zero)
-        h2 = h * h
-        pot_b = -0.5 * kd - 0.25 * kb
-        ma, mb = m - da_a, m - da_b
-        jaa = 3.0 * ma + h * a1 - h2 * (-0.5 * kd + kb / 12.0 + dqa / 6.0 + dva / h)
-        jab = ma - h2 * (-0.5 * kd + 5.0 * kb / 12.0 - dqa / 6.0)
-        jba = -3.0 * mb - h2 * (pot_b + 0.5 * dqb)
-        jbb = mb + h * a1 - h2 * (pot_b + 0.5 * dqb + dvb / h)
-        keep, swap = self._keep, self._swap
-        rows = [[keep @ (jaa + hs) - swap, keep @ (jab + hs) + swap], [jba + hs, jbb + hs]]
-        if s.mh:
-            gt = block("G", s.discrete_jacobian_values(self.q, qb, self.t, self._tf)).T
-            rows[0].append(keep @ gt)
-            rows[1].append(gt)
-            half = 0.5 * block("G", s.jacobian_values(qb, self._tf))
-            rows.append([half, half, None])
+            put("Da", s.acceleration_jacobian(qa, xa / h, self.t, acc[0]),
+                [(0, 0, -3.0), (0, n, -1.0)])
+            put("Da", s.acceleration_jacobian(qb, xb / h, self._tf, acc[1]),
+                [(n, 0, 3.0), (n, n, -1.0)])
+        if s.block_sizes["H"]:
+            put("H", s.hessian_values(qm, self.t + 0.5 * h, mu),
+                [(0, 0, 0.25), (0, n, 0.25), (n, 0, 0.25), (n, n, 0.25)])
+        if mh:
+            gbar = s.discrete_jacobian_values(self.q, qb, self.t, self._tf)
+            g_rows, g_cols = s.block_pattern("G")
+            for r0 in (0, n):  # Ḡᵀμ in both stages' rows
+                v = gbar * keep[g_cols] if r0 == 0 else gbar
+                parts.append((g_cols + r0, g_rows + 2 * n, v))
+            put("G", s.jacobian_values(qb, self._tf), [(2 * n, 0, 0.5), (2 * n, n, 0.5)])
         if s.mn:
-            am = block("A", s.nonholonomic_values(qm))
-            rows[0].append(keep @ am.T)
-            rows[1].append(am.T)
-            for r in rows[2:]:
-                r.append(None)
-            da = 0.5 * am + 0.25 * block("A", s.nonholonomic_derivative(qm, dq))
-            rows.append([da, da] + [None] * (len(rows[0]) - 2))
-        return sp.bmat(rows, format="csc")
+            am = s.nonholonomic_values(qm)
+            a_rows, a_cols = s.block_pattern("A")
+            for r0 in (0, n):
+                v = am * keep[a_cols] if r0 == 0 else am
+                parts.append((a_cols + r0, a_rows + 2 * n + mh, v))
+            o = 2 * n + mh
+            put("A", am, [(o, 0, 0.5), (o, n, 0.5)])
+            put("A", s.nonholonomic_derivative(qm, dq), [(o, 0, 0.25), (o, n, 0.25)])
+        w = self._massless  # their stage-a rows: x_b − x_a = 0
+        ones = np.ones(len(w))
+        parts += [(w, w, -ones), (w, w + n, ones)]
+        size = 2 * n + mh + s.mn
+        vals = np.concatenate([v for _, _, v in parts])
+        if self._scatter is None:  # the pattern is the same at every call: sort it once
+            rows = np.concatenate([r for r, _, _ in parts])
+            cols = np.concatenate([c for _, c, _ in parts])
+            uniq, inv = np.unique(cols * size + rows, return_inverse=True)
+            self._scatter = (inv, (uniq % size).astype(np.int32),
+                             np.searchsorted(uniq // size, np.arange(size + 1)).astype(np.int32))
+        inv, indices, indptr = self._scatter
+        data = np.bincount(inv, vals, minlength=len(indices))
+        return sp.csc_matrix((data, indices, indptr), shape=(size, size))
 
     def _finish(self, x):
         s, h = self.sys, self.h

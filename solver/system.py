@@ -245,16 +245,22 @@ class System:
         ``ed`` scheme's numerical dissipation is measured in)."""
         return _cat([s.material_stiffness(q) for s in self.stiff_sets], float)
 
-    def block_matrix(self, name: str, vals: Array) -> sp.csr_matrix:
-        """One named block of the Newton matrix alone, as a sparse matrix: n × n for the
-        coordinate blocks (M, A1, K, Dq, Dv, Da, H), mh × n for G, mn × n for A."""
+    def block_pattern(self, name: str) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+        """(rows, cols) of one named block within itself: n × n for the coordinate blocks
+        (M, A1, K, Dq, Dv, Da, H), mh × n for G, mn × n for A."""
         rows, cols = self._patterns[name]
-        shape = (self.n, self.n)
         if name == "G":
-            rows, shape = rows - self.n, (self.mh, self.n)
+            rows = rows - self.n
         elif name == "A":
-            rows, shape = rows - self.n - self.mh, (self.mn, self.n)
-        return sp.csr_matrix((vals, (rows, cols)), shape=shape)
+            rows = rows - self.n - self.mh
+        return rows, cols
+
+    def block_matrix(self, name: str, vals: Array) -> sp.csr_matrix:
+        """One named block of the Newton matrix alone, as a sparse matrix (see
+        :meth:`block_pattern`)."""
+        rows, cols = self.block_pattern(name)
+        m = {"G": self.mh, "A": self.mn}.get(name, self.n)
+        return sp.csr_matrix((vals, (rows, cols)), shape=(m, self.n))
 
     def applied(self, q: Array, v: Array, t: float, a: Array | None = None) -> Array:
         """Generalized forces of dampers, loads and first-order right-hand sides; ``a`` (the
