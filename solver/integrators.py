@@ -692,7 +692,8 @@ class EnergyDecaying(Integrator):
                              np.searchsorted(uniq // size, np.arange(size + 1)).astype(np.int32))
         inv, indices, indptr = self._scatter
         data = np.bincount(inv, vals, minlength=len(indices))
-        mat = sp.csc_matrix((data, indices, indptr), shape=(size, size))
+        # copies: eliminate_zeros below works in place and the pattern is kept for next time
+        mat = sp.csc_matrix((data, indices.copy(), indptr.copy()), shape=(size, size))
         # no explicit zeros (e.g. the massless unknowns' stage-a rows): SuperLU must see an
         # exactly singular matrix as such, not pivot on roundoff
         mat.eliminate_zeros()
