@@ -694,9 +694,7 @@ class EnergyDecaying(Integrator):
         data = np.bincount(inv, vals, minlength=len(indices))
         # copies: eliminate_zeros below works in place and the pattern is kept for next time
         mat = sp.csc_matrix((data, indices.copy(), indptr.copy()), shape=(size, size))
-        # no explicit zeros (e.g. the massless unknowns' stage-a rows): SuperLU must see an
-        # exactly singular matrix as such, not pivot on roundoff
-        mat.eliminate_zeros()
+        mat.eliminate_zeros()  # the massless unknowns' masked stage-a entries
         return mat
 
     def _finish(self, x):

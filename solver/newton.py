@@ -23,6 +23,9 @@ STALE_RATE = 0.02  # Rate above which factors from an earlier step are not worth
 # Updates that stop shrinking while within 1/ROUNDOFF_FLOOR of the tolerance are roundoff noise
 # (the KKT matrix's condition number times machine precision), not divergence.
 ROUNDOFF_FLOOR = 1e-5
+# LU pivots smaller than this times the largest are zero: a singular matrix (measured: the
+# rotor's Newton matrices 1.7e-9, a rotation with no inertia and no joint 7e-18)
+PIVOT_RATIO = 1e-13
 
 
 @dataclass
@@ -49,9 +52,19 @@ class LinearSolver:
                 self.lu = spla.splu(mat.tocsc(), permc_spec="COLAMD")
         except (RuntimeError, spla.MatrixRankWarning) as exc:
             self.lu = None
-            return (f"singular Newton matrix ({exc}); redundant or insufficient constraints, "
-                    "or a body with zero inertia whose rotation no joint fixes")
+            return _singular(str(exc))
+        # a zero pivot that roundoff left at 1e-16 is still a zero pivot (whether it comes
+        # out exactly zero depends on the order of the sums that built the matrix)
+        d = np.abs(self.lu.U.diagonal())
+        if d.size and d.min() <= PIVOT_RATIO * d.max():
+            self.lu = None
+            return _singular(f"pivot {d.min():.1e} against {d.max():.1e}")
         return None
+
+
+def _singular(why: str) -> str:
+    return (f"singular Newton matrix ({why}); redundant or insufficient constraints, "
+            "or a body with zero inertia whose rotation no joint fixes")
 
 
 def _factor(solver, jacobian, x) -> str:
