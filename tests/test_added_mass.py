@@ -57,7 +57,7 @@ def test_apparent_mass_adds_inertia(scheme):
         t, th, balance = run(scheme, h)
         errs.append(np.abs(th - reference(t)).max())
     order = np.log2(errs[0] / errs[1])
-    # measured: ep 3.0e-5 -> 7.6e-6, galpha 7.0e-5 -> 1.8e-5, ed 3.7e-4 -> 9.2e-5 (orders 2.00);
+    # measured: ep 3.0e-5 -> 7.6e-6, galpha 7.0e-5 -> 1.8e-5, ed 2.6e-5 -> 6.5e-6 (orders 2.00);
     # ep balance drift 1.1e-12 J
     assert errs[1] < 1e-4, errs
     assert order > 1.9, (errs, order)
