@@ -10,10 +10,11 @@ weights ``w_i`` and a clamped knot vector on ``[0, 1]`` is
                      = \\frac{\\mathbf A(\\eta)}{w(\\eta)},
 
 with the B-spline basis functions ``N_{i,p}``.  The numerator ``A`` and the denominator ``w`` are
-ordinary (polynomial) B-splines: they are evaluated as ONE :class:`scipy.interpolate.BSpline`
-whose coefficients are the homogeneous control points ``(w_i P_i, w_i)``.  Their derivatives are
-exact (cached derivative splines), and the derivatives of the rational curve follow from
-differentiating ``A = w p`` with Leibniz's rule (Piegl & Tiller, *The NURBS Book*, eq. 4.8)::
+ordinary (polynomial) B-splines: they are evaluated together, by one compiled kernel
+(:mod:`solver.bsplines`: the basis functions and their exact derivatives on the knot span,
+Piegl & Tiller A2.3), from the homogeneous control points ``(w_i P_i, w_i)``, and the
+derivatives of the rational curve follow from differentiating ``A = w p`` with Leibniz's rule
+(Piegl & Tiller, *The NURBS Book*, eq. 4.8)::
 
     p^(k) = ( A^(k) - sum_{i=1..k} C(k, i) w^(i) p^(k-i) ) / w .
 
@@ -81,9 +82,9 @@ refines by Newton's method (``ds/deta = |p'|``) safeguarded by bisection: 1-2 it
 
 Performance
 -----------
-Derivative splines are built once; an evaluation costs one ``BSpline`` call per derivative
-order (~5 us) plus a few tens of small NumPy operations, so a scalar ``frame`` takes some
-30-70 us and an array of 50 parameters hardly more.
+A point with its derivatives costs one compiled call (~5 us for a few parameters, against
+~60 us for scipy ``BSpline`` calls per derivative order and the quotient rule in NumPy); a
+frame adds a few tens of small NumPy operations.
 """
 
 from __future__ import annotations
@@ -95,7 +96,9 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.interpolate import BSpline, make_interp_spline
+from scipy.interpolate import make_interp_spline
+
+from solver.bsplines import nurbs_derivatives
 
 __all__ = [
     "NurbsCurve",
@@ -243,23 +246,6 @@ def _unit_normal(value: Any) -> FloatArray:
     return n / np.linalg.norm(n)
 
 
-def _derivative_spline(spl: BSpline) -> BSpline:
-    """First derivative of a clamped B-spline as a B-spline of one degree less.
-
-    ``d/du sum_i c_i N_{i,k} = sum_i k (c_{i+1} - c_i) / (t_{i+k+1} - t_{i+1}) N_{i+1,k-1}``
-    (Piegl & Tiller eq. 3.4).  Unlike :meth:`BSpline.derivative` this also works across
-    knots of multiplicity ``k`` (a C0 joint, e.g. the quarter arcs of a NURBS circle): a
-    zero-width denominator belongs to a basis function with empty support, whose coefficient
-    is irrelevant and is set to 0.  The derivative there is one-sided (from the right).
-    """
-    t, c, k = spl.t, spl.c, spl.k
-    dt = t[k + 1 : -1] - t[1 : len(c)]
-    safe = np.where(dt > 0.0, dt, 1.0)
-    scale = np.where(dt > 0.0, k / safe, 0.0)
-    dc = (c[1:] - c[:-1]) * scale.reshape(-1, *([1] * (c.ndim - 1)))
-    return BSpline(t[1:-1], dc, k - 1, extrapolate=True)
-
-
 # --------------------------------------------------------------------------------------------
 # the curve
 # --------------------------------------------------------------------------------------------
@@ -305,8 +291,8 @@ class NurbsCurve:
 
     Notes
     -----
-    Evaluation costs a few scipy ``BSpline`` calls (one per derivative order, ~5 us each) plus
-    some tens of small NumPy operations, for a scalar or an array of any shape alike.
+    Evaluation costs one compiled call for the point and its derivatives plus some tens of
+    small NumPy operations for a frame, for a scalar or an array of any shape alike.
     """
 
     def __init__(
@@ -391,12 +377,7 @@ class NurbsCurve:
         # cancel and the curve is the polynomial B-spline with coefficients P.
         self._rational = bool(np.any(w != w[0]))
         coef = np.column_stack((pts * w[:, None], w)) if self._rational else pts
-        base = BSpline(k, coef, p, extrapolate=True)
-        # Cached derivative splines d^j/deta^j, j = 0..degree (higher ones vanish identically).
-        splines = [base]
-        for _ in range(p):
-            splines.append(_derivative_spline(splines[-1]))
-        self._splines: tuple[BSpline, ...] = tuple(splines)
+        self._hom: FloatArray = np.ascontiguousarray(coef, dtype=float)
 
         self._build_arc_length_table()
         self._grid: FloatArray | None = None
@@ -431,29 +412,10 @@ class NurbsCurve:
         return np.minimum(np.maximum(x.ravel(), 0.0), 1.0), x.shape
 
     def _derivs(self, x: FloatArray, order: int, first: int = 0) -> list[FloatArray]:
-        """Derivatives ``[p^(first), ..., p^(order)]`` at the flat parameters ``x``, each (N, 3).
-
-        Non-rational curves evaluate only the requested orders; rational ones need all lower
-        orders for the quotient rule.
-        """
-        spl = self._splines
-        deg = self.degree
-        if not self._rational:
-            return [
-                spl[j](x) if j <= deg else np.zeros((len(x), 3)) for j in range(first, order + 1)
-            ]
-        # Homogeneous derivatives A^(j) (first 3 columns) and w^(j) (last column).
-        hom = [spl[j](x) if j <= deg else np.zeros((len(x), 4)) for j in range(order + 1)]
-        # Leibniz on A = w p:  A^(k) = sum_i C(k,i) w^(i) p^(k-i)  =>
-        #   p^(k) = (A^(k) - sum_{i=1..k} C(k,i) w^(i) p^(k-i)) / w.
-        inv_w = 1.0 / hom[0][:, 3:]
-        out: list[FloatArray] = []
-        for kk in range(order + 1):
-            v = hom[kk][:, :3]
-            for i in range(1, kk + 1):
-                v = v - math.comb(kk, i) * hom[i][:, 3:] * out[kk - i]
-            out.append(v * inv_w)
-        return out[first:]
+        """Derivatives ``[p^(first), ..., p^(order)]`` at the flat parameters ``x``, each (N, 3)
+        (one compiled call: :func:`solver.bsplines.nurbs_derivatives`)."""
+        d = nurbs_derivatives(self.knots, self._hom, self.degree, x, order, self._rational)
+        return list(d[first:])
 
     def derivatives(self, eta: ArrayLike, order: int = 3) -> FloatArray:
         """Point and derivatives with respect to ``eta``.
