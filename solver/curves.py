@@ -11,8 +11,9 @@ weights ``w_i`` and a clamped knot vector on ``[0, 1]`` is
 
 with the B-spline basis functions ``N_{i,p}``.  The numerator ``A`` and the denominator ``w`` are
 ordinary (polynomial) B-splines: they are evaluated together, by one compiled kernel
-(:mod:`solver.bsplines`: the basis functions and their exact derivatives on the knot span,
-Piegl & Tiller A2.3), from the homogeneous control points ``(w_i P_i, w_i)``, and the
+(:mod:`solver.bsplines`: the basis functions on the knot span, Piegl & Tiller A2.2, with the
+derivatives as splines of the coefficients' differences, eq. 3.4), from the homogeneous
+control points ``(w_i P_i, w_i)``, and the
 derivatives of the rational curve follow from differentiating ``A = w p`` with Leibniz's rule
 (Piegl & Tiller, *The NURBS Book*, eq. 4.8)::
 

@@ -756,9 +756,9 @@ class EnergyDecaying(Integrator):
             blocks["Da"] = -s.acceleration_jacobian(q, v, self._tf, a)
         rhs = [np.zeros(s.n), -(s.gmul(g, v) + s.constraint_rate(q, self._tf))]
         if s.mn:
-            a = s.nonholonomic_values(q)
-            blocks["AT"] = blocks["A"] = a
-            rhs.append(-s.amul(a, v))
+            an = s.nonholonomic_values(q)
+            blocks["AT"] = blocks["A"] = an
+            rhs.append(-s.amul(an, v))
         if self._proj.factor(s.kkt(blocks)):
             # a massless unknown no constraint determines (its velocity is set by forces
             # alone): no M-projection exists; the scheme runs without it

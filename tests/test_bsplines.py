@@ -60,4 +60,3 @@ def test_rational_curve_against_its_closed_form():
     fd = (nurbs_derivatives(t, hom, 2, xi + h, 0, True)[0]
           - nurbs_derivatives(t, hom, 2, xi - h, 0, True)[0]) / (2 * h)
     np.testing.assert_allclose(d[1][1:-1], fd, atol=1e-8)  # measured 1.3e-10 (the FD error)
-
