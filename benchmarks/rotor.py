@@ -1,6 +1,7 @@
 """Rotor benchmark: the UH-60 rotor model (studies/rotor.py) per revolution and per case.
 
-    PYTHONPATH=. python benchmarks/rotor.py --revolutions 2 [--bifilar free] [--profile]
+    PYTHONPATH=. python benchmarks/rotor.py --revolutions 2 [--bifilar free] [--scheme ed]
+                                             [--profile]
     PYTHONPATH=. python benchmarks/rotor.py --case [--bifilar free]     # one whole case
 
 The first form builds the model with its defaults (``--steps-per-rev`` to change them), marches
@@ -67,12 +68,16 @@ def main() -> None:
     a.add_argument("--revolutions", type=int, default=2)
     a.add_argument("--bifilar", default="free", choices=["free", "locked", "equivalent"])
     a.add_argument("--steps-per-rev", type=int, default=None)
+    a.add_argument("--scheme", default=None, choices=["galpha", "ed", "ep"],
+                   help="time integration scheme (default: the model's, galpha)")
     a.add_argument("--profile", action="store_true")
     a.add_argument("--case", action="store_true", help="run one whole case")
     args = a.parse_args()
     given = {"bifilar": args.bifilar}
     if args.steps_per_rev:
         given["steps_per_rev"] = args.steps_per_rev
+    if args.scheme:
+        given["scheme"] = args.scheme
     p = SPEC.complete(given)
     res = per_case(p) if args.case else per_revolution(p, args.revolutions, args.profile)
     print(json.dumps(res))
