@@ -750,16 +750,11 @@ class EnergyDecaying(Integrator):
         s = self.sys
         if s.mh + s.mn == 0 or self._proj is False:
             return v
-        g = s.jacobian_values(q, self._tf)
-        blocks = {"M": s.M_vals, "A1": s.A1_vals, "GT": g, "G": g}
-        if s.block_sizes["Da"]:
-            blocks["Da"] = -s.acceleration_jacobian(q, v, self._tf, a)
+        mat, g, an = inertia_kkt(s, q, v, self._tf, a)
         rhs = [np.zeros(s.n), -(s.gmul(g, v) + s.constraint_rate(q, self._tf))]
         if s.mn:
-            an = s.nonholonomic_values(q)
-            blocks["AT"] = blocks["A"] = an
             rhs.append(-s.amul(an, v))
-        if self._proj.factor(s.kkt(blocks)):
+        if self._proj.factor(mat):
             # a massless unknown no constraint determines (its velocity is set by forces
             # alone): no M-projection exists; the scheme runs without it
             self._proj = False
@@ -854,17 +849,24 @@ def project_velocities(s: System, q: Array, v: Array, t: float) -> Array:
     return sol[: s.n]
 
 
-def initial_accelerations(s: System, q: Array, v: Array, t: float, multipliers: bool = False):
-    """q̈ (and ẋ of the first-order states) from
-    [[M + A − ∂f/∂a, Gᵀ, Aₙᵀ], [G, 0, 0], [Aₙ, 0, 0]] [q̈; λ; ν] = [f(a = 0) − ∇V; −γ; −γ_A]."""
+def inertia_kkt(s: System, q: Array, v: Array, t: float, a: Array | None = None):
+    """[[M + A − ∂f/∂a, Gᵀ, Aₙᵀ], [G, 0, 0], [Aₙ, 0, 0]] at (q, v, t) (added masses seen at
+    accelerations ``a``): the matrix of the consistent accelerations and of ``ed``'s
+    end-velocity projection. Returns it with the G and Aₙ values."""
     g = s.jacobian_values(q, t)
     blocks = {"M": s.M_vals, "A1": s.A1_vals, "GT": g, "G": g}
     if s.block_sizes["Da"]:  # added masses: f = f(a = 0) + (∂f/∂a) a, affine in a
-        blocks["Da"] = -s.acceleration_jacobian(q, v, t)
+        blocks["Da"] = -s.acceleration_jacobian(q, v, t, a)
+    an = s.nonholonomic_values(q) if s.mn else np.zeros(0)
     if s.mn:
-        a = s.nonholonomic_values(q)
-        blocks["AT"] = blocks["A"] = a
-    mat = s.kkt(blocks)
+        blocks["AT"] = blocks["A"] = an
+    return s.kkt(blocks), g, an
+
+
+def initial_accelerations(s: System, q: Array, v: Array, t: float, multipliers: bool = False):
+    """q̈ (and ẋ of the first-order states) from
+    [[M + A − ∂f/∂a, Gᵀ, Aₙᵀ], [G, 0, 0], [Aₙ, 0, 0]] [q̈; λ; ν] = [f(a = 0) − ∇V; −γ; −γ_A]."""
+    mat, _g, _an = inertia_kkt(s, q, v, t)
     rhs = np.concatenate([s.applied(q, v, t) - s.gradient(q), -s.constraint_curvature(q, v, t),
                           -s.nonholonomic_curvature(q, v) if s.mn else np.zeros(0)])
     lin = LinearSolver()
