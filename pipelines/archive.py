@@ -95,7 +95,8 @@ INT_FILL = -1
 RESERVED_NAMES = frozenset(
     {"case", "case_name", "case_id", "status", "message", "harmonic", "direction",
      "time_in_rev", "psi", "sample", "time", "run_hub_speed", "run_revolutions",
-     "run_transient_revolutions", "run_samples_per_rev", "run_wall_time"}
+     "run_transient_revolutions", "run_samples_per_rev", "run_wall_time",
+     "run_step_error_estimate"}
 )
 
 
@@ -227,7 +228,8 @@ def case_summary(ds: xr.Dataset, spec: ModelSpec, n_max: int = N_MAX) -> xr.Data
         (:attr:`ModelSpec.periodic`): the harmonics of :func:`studies.harmonics.case_harmonics`,
         the declared histories over the last recorded revolution (dim ``time_in_rev``,
         coordinate ``psi`` in degree, starting at psi = 0), ``run_hub_speed`` (rad s-1),
-        ``run_revolutions``, ``run_samples_per_rev`` and ``run_transient_revolutions``.
+        ``run_revolutions``, ``run_samples_per_rev``, ``run_transient_revolutions`` and, for a
+        Richardson-extrapolated run, ``run_step_error_estimate``.
         Otherwise: the declared histories whole (dim ``sample``) with their ``time`` (s).
         Every variable has the ``units`` and ``long_name`` of its declaration.
 
@@ -265,6 +267,14 @@ def case_summary(ds: xr.Dataset, spec: ModelSpec, n_max: int = N_MAX) -> xr.Data
             out["run_transient_revolutions"] = (
                 (), np.int32(ds.attrs["transient_revolutions"]),
                 {"units": "1", "long_name": "revolutions simulated before recording"},
+            )
+        if np.isfinite(ds.attrs.get("step_error_estimate", np.nan)):
+            out["run_step_error_estimate"] = (
+                (), float(ds.attrs["step_error_estimate"]),
+                {"units": "1", "long_name": "estimated time-step error of the harmonics at the "
+                 "time step (Richardson: |c(h) - c(2h)|/3, largest over harmonics 0-8 and "
+                 "signals, relative to each signal's largest harmonic); the archived harmonics "
+                 "are extrapolated and carry a fraction of it"},
             )
     else:
         out = xr.Dataset()
@@ -578,7 +588,8 @@ def consolidate(
         "flag_values": FLAG_VALUES, "flag_meanings": FLAG_MEANINGS,
     })
     data_vars["message"] = xr.Variable(case_dims, message, {
-        "units": "1", "long_name": "failure message (exception type and text), empty if ok",
+        "units": "1", "long_name": "failure message (exception type and text); for an ok case "
+        "the model's note (e.g. how the periodic response was reached), usually empty",
     })
     data_vars["case_id"] = xr.Variable(case_dims, case_ids, {
         "units": "1",

@@ -509,8 +509,8 @@ def run_case(model_name: str, params: Mapping[str, Any], case_file: str,
     Returns
     -------
     dict
-        ``case_id``, ``status`` (0 ok, 1 failed), ``message`` (``""`` if ok) and ``wall_time``
-        (s).
+        ``case_id``, ``status`` (0 ok, 1 failed), ``message`` (the failure; for an ok case the
+        model's note, usually ``""``) and ``wall_time`` (s).
     """
     start = time.perf_counter()
     case_id = Path(case_file).stem
@@ -534,6 +534,8 @@ def run_case(model_name: str, params: Mapping[str, Any], case_file: str,
             raise ModelFailure("simulation did not converge: "
                                + str(result.attrs.get("message", "no message")))
         summary = case_summary(result, spec)
+        # an ok case may carry the model's note (e.g. that shooting fell back to marching)
+        message = str(result.attrs.get("message", ""))
     except Exception as exc:
         status, message, tb = STATUS_FAILED, _one_line(exc), traceback.format_exc()
         summary = xr.Dataset()

@@ -150,7 +150,9 @@ class PeriodicRecord:
     ``transient`` the revolutions marched before recording; ``change`` the last periodicity
     change; ``extrapolated`` whether the samples are the extrapolated limit of the marched
     revolutions (:func:`march`) rather than marched ones, and ``residual`` that
-    extrapolation's unexplained part (:func:`rre_weights`).
+    extrapolation's unexplained part (:func:`rre_weights`); ``restarts`` how often
+    :func:`shoot` restarted the model from an extrapolated state, and ``note`` what the case
+    message should say (e.g. that shooting fell back to marching).
     """
 
     samples: Array
@@ -158,6 +160,8 @@ class PeriodicRecord:
     change: float
     extrapolated: bool = False
     residual: float = 0.0
+    restarts: int = 0
+    note: str = ""
 
 
 def march(step: Callable[[], None], sample: Callable[[], Array],
@@ -278,3 +282,229 @@ def _repeat(one: Array, revolutions: int) -> Array:
         block[:, 0] += (r + 1) * period
         reps.append(block)
     return np.concatenate(reps)
+
+
+# The shooting parameters every periodic model declares (studies.hub).
+SHOOTING: dict[str, Param] = {
+    "shooting_window": Param(
+        12, "1", "iterates of the sector map (one N-th of a revolution each, N the symmetry's "
+        "sectors) whose changes give the extrapolated restart state (0: march only)",
+        minimum=0, maximum=40),
+    "shooting_restarts": Param(
+        4, "1", "restarts from an extrapolated state before shooting gives up and marches",
+        minimum=0, maximum=50),
+}
+
+
+def shoot(integ, sample: Callable[[], Array], signals: Callable[[Array], Array], *,
+          observe: Callable[[Array, int], Array], symmetry, system, steps_per_rev: int,
+          revolutions: int, max_revolutions: int, tolerance: float,
+          groups: Sequence[int] | None = None, separate_mean: bool = False,
+          window: int = 12, max_restarts: int = 4, restart_fraction: float = 0.5,
+          max_residual: float = 0.1, min_iterates: int = 4,
+          hint: str = "raise max_revolutions") -> PeriodicRecord:
+    """Periodic response by shooting: extrapolate the fixed point of the sector map and
+    restart the model from it, until two successive marched revolutions agree.
+
+    The map is one N-th of a revolution of the time integration followed by the symmetry's
+    turn-and-permute back to the starting phase (:meth:`solver.symmetry.CyclicSymmetry.back`;
+    N = 1 without symmetry: the one-revolution map), so a revolution gives N iterates
+    x_0, x_1, … . After each iterate, reduced-rank extrapolation (:func:`rre_weights`) of the
+    observed blocks (``observe``) since the last restart gives weights γ whose combination of
+    the iterates, Σ γ_j x_j, is the estimated fixed point. Once the estimate is good enough —
+    it leaves at most ``max_residual`` of the last change unexplained, and that part,
+    relative to the signals' scale, is within ``restart_fraction`` × ``tolerance`` (with at
+    least ``min_iterates`` iterates) or the ``window`` is full — the model restarts from
+    that state at the next whole revolution (directors combined on the rotation group,
+    :func:`solver.symmetry.affine_combination`; positions projected onto the constraints).
+    For a linear map this is GMRES on (Φ − I)x = 0 in the Krylov space of the iterates
+    (Sidi 2017, ch. 1; Smith, Ford & Sidi 1987), i.e. Newton–Krylov shooting with the
+    iterates themselves as the Jacobian–vector products: no extra perturbed revolutions, and
+    convergence is quadratic in the cycles once the window spans the lightly damped modes.
+    The restart keeps the combined velocities as they are (the scheme's end velocities need
+    not lie on the velocity constraints, and projecting them would start an undamped
+    two-step mode).
+
+    The periodicity test is :func:`march`'s: the harmonics of two successive whole revolutions
+    marched since the last restart change by at most ``tolerance``; the recorded revolutions
+    are the last ``revolutions`` of those (all marched from one state, none extrapolated).
+    After ``max_restarts`` restarts without passing it, the model marches on from the last
+    state (time marching as the fallback), and the record's note says so.
+
+    Parameters
+    ----------
+    integ
+        The integrator (its ``q``, ``v``, ``t``, ``state``/``restore`` are used).
+    sample, signals, steps_per_rev, revolutions, max_revolutions, tolerance, groups,
+    separate_mean
+        As for :func:`march`.
+    observe
+        ``observe(block, j)``: the observations of the j-th iterate's block of samples
+        (steps_per_rev / N rows) at the starting phase, e.g. non-rotating signals as they are
+        and per-sector signals rolled by j sectors.
+    symmetry
+        :class:`solver.symmetry.CyclicSymmetry` or ``None`` (the one-revolution map).
+    system
+        The assembled model (for the director triads of the combination).
+    window, max_restarts, restart_fraction, max_residual, min_iterates
+        Largest number of iterates extrapolated per restart (the window spans the lightly
+        damped modes: two per mode), restarts allowed, and when to restart (see above).
+    hint
+        Advice appended to the error when the response is not periodic in time.
+
+    Raises
+    ------
+    RuntimeError
+        If the response is not periodic after ``max_revolutions``.
+    """
+    from solver.integrators import project_positions
+    from solver.symmetry import affine_combination
+
+    n_sec = 1 if symmetry is None else symmetry.n_sectors
+    if steps_per_rev % n_sec:
+        raise ValueError(f"steps_per_rev = {steps_per_rev} must be a multiple of the "
+                         f"{n_sec} sectors of the symmetry")
+    m = steps_per_rev // n_sec
+    step_once = stepper(integ, 2 * np.pi / (steps_per_rev * integ.h))
+
+    def back(q: Array, v: Array, k: int) -> tuple[Array, Array]:
+        return (q, v) if symmetry is None else symmetry.back(q, v, k)
+
+    blocks: list[Array] = []  # blocks since the last restart
+    obs: list[Array] = []
+    states: list[tuple[Array, Array]] = []  # end states of the blocks, at phase 0
+    done = restarts = 0  # iterates done
+    quarter = steps_per_rev * integ.h / n_sec  # s
+
+    def phase() -> int:  # sector periods since t = 0: the index of the sector roll
+        return round(integ.t / quarter)
+
+    change = float("inf")
+    residual = 0.0
+    while True:
+        rows = []
+        for _ in range(m):
+            step_once()
+            rows.append(sample())
+        block = np.array(rows)
+        done += 1
+        blocks.append(block)
+        revs_done = done / n_sec
+        if len(blocks) >= 2 * n_sec and len(blocks) % n_sec == 0:
+            cur = rev_harmonics(signals(np.concatenate(blocks[-n_sec:])))
+            prev = rev_harmonics(signals(np.concatenate(blocks[-2 * n_sec : -n_sec])))
+            change = harmonic_change(cur, prev, groups, separate_mean)
+            ok = change <= tolerance and len(blocks) >= revolutions * n_sec
+            report(f"revolution {revs_done:g}: periodicity change {change:.2e}, tolerance "
+                   f"{tolerance:g}" + (" (periodic)" if ok else ""))
+            if ok:
+                rec = np.concatenate(blocks[-revolutions * n_sec :])
+                note = ("" if window < 2 or restarts < max_restarts else
+                        f"periodic by marching: {restarts} shooting restarts did not reach a "
+                        "periodic response")
+                return PeriodicRecord(rec, int(np.ceil(revs_done - revolutions)), change,
+                                      residual=residual, restarts=restarts, note=note)
+        if revs_done >= max_revolutions:
+            raise RuntimeError(f"response not periodic after {max_revolutions} revolutions "
+                               f"({restarts} shooting restarts; last change {change:.2e} > "
+                               f"tolerance {tolerance:g}); {hint}")
+        if window < 2 or restarts == max_restarts:
+            continue
+        obs.append(observe(block, phase()))
+        states.append(back(integ.q, integ.v, phase()))  # at the phase of t = 0
+        k = len(obs) - 1
+        if k < 2:
+            continue
+        scale = np.abs(obs[-1]).max(axis=0)
+        live = scale > 0
+        gamma, residual = rre_weights([o[:, live] / scale[live] for o in obs])
+        # the part of the last change the extrapolation leaves unexplained, relative to the
+        # signals' scale: the estimate's error, to first order
+        last = float(np.max(np.abs(obs[-1] - obs[-2])[:, live] / scale[live]))
+        if last <= tolerance:  # periodic already, or nearly: let the test decide
+            continue
+        unexplained = residual * last
+        if residual > max_residual or not (
+                k >= window or (k >= min_iterates
+                                and unexplained <= restart_fraction * tolerance)):
+            if k >= window:  # slide the window
+                obs, states = obs[1:], states[1:]
+            continue
+        q, v = affine_combination(system, gamma, [s[0] for s in states[1:]],
+                                  [s[1] for s in states[1:]])
+        # the estimate is a state of the phase of t = 0: restart at the next whole revolution
+        # (the forcing and the driven rotation repeat), so that the revolutions recorded after
+        # it start at ψ = 0 like a marched run's
+        t_restart = np.ceil(integ.t / (n_sec * quarter) - 1e-9) * n_sec * quarter
+        # the combination leaves the position constraints violated at second order in the
+        # iterates' spread: the scheme's first step would close that gap in one chord and
+        # leave a velocity jump of (gap)/h as an undamped two-step mode, which slows every
+        # later Newton solve; projecting the positions (not the velocities, whose normal part
+        # is the scheme's own) avoids it
+        q = project_positions(system, q, t_restart)
+        state = integ.state()
+        state.update(t=t_restart, q=q, v=v)
+        integ.restore(state)
+        restarts += 1
+        report(f"revolution {revs_done:g}: restarted from the extrapolated periodic state "
+               f"(restart {restarts}, {k} iterates, unexplained part {residual:.3f})")
+        blocks, obs, states = [], [], []
+
+
+def referred_harmonics(rows: Array, omega: float, n_max: int) -> NDArray[np.complex128]:
+    """Complex harmonics 0..n_max of one revolution of sampled rows (time in s in column 0,
+    uniform samples), referred to the azimuth ψ = Ωt = 0: x(ψ) = c_0 + 2 Re Σ_k c_k e^{ikψ}."""
+    psi0 = omega * float(rows[0, 0])
+    return rev_harmonics(rows[:, 1:], n_max) * np.exp(-1j * np.arange(n_max + 1)
+                                                      * psi0)[:, None]
+
+
+def richardson(fine: Array, coarse: Array, omega: float, n_max: int,
+               order: int = 2) -> tuple[Array, Array]:
+    """Richardson extrapolation of the harmonics of a periodic response computed at two steps.
+
+    The periodic response of a symmetric one-step scheme (the midpoint-type ``ep``) has an
+    error expansion in even powers of the step, so the harmonics c(h) = c + a h² + O(h⁴) of
+    the response at h (``fine``) and 2h (``coarse``) give c ≈ c(h) + (c(h) − c(2h))/3 with
+    error O(h⁴). The correction of harmonics 0..n_max, a band-limited periodic signal, is
+    added to every sample of ``fine``; harmonics above n_max keep the fine step's error.
+
+    Parameters
+    ----------
+    fine, coarse
+        Whole periodic revolutions of samples (rows: time in s, then the signals), at h and
+        2h; the last revolution of each is used (``fine`` has twice the samples per rev).
+    omega
+        Rotor speed (rad/s).
+    n_max
+        Highest harmonic corrected.
+    order
+        Order p of the leading error term (2 for ``ep``): the factor is 1/(2^p − 1).
+
+    Returns
+    -------
+    corrected : ndarray
+        ``fine`` with the correction added (time column unchanged).
+    estimate : ndarray, shape (signals,)
+        The correction's largest harmonic, relative to the signal's largest harmonic: the
+        estimated time-step error of the fine step's harmonics (the extrapolated ones carry
+        the O(h⁴) remainder, much smaller).
+    """
+    period = 2 * np.pi / omega
+    n_f = round(period / (fine[1, 0] - fine[0, 0]))
+    n_c = round(period / (coarse[1, 0] - coarse[0, 0]))
+    if n_f != 2 * n_c or fine.shape[0] % n_f or coarse.shape[0] % n_c:
+        raise ValueError(f"richardson: need whole revolutions at h and 2h (got {n_f} and {n_c} "
+                         "samples per revolution)")
+    c_f = referred_harmonics(fine[-n_f:], omega, n_max)
+    c_c = referred_harmonics(coarse[-n_c:], omega, n_max)
+    delta = (c_f - c_c) / (2**order - 1)
+    k = np.arange(n_max + 1)
+    phase = np.exp(1j * omega * np.outer(fine[:, 0], k))  # (samples, harmonics)
+    weight = np.where(k == 0, 1.0, 2.0)
+    corrected = fine.copy()
+    corrected[:, 1:] += np.real(phase @ (weight[:, None] * delta))
+    scale = np.abs(c_f).max(axis=0)
+    estimate = np.divide(np.abs(delta).max(axis=0), scale, out=np.zeros_like(scale),
+                         where=scale > 0)
+    return corrected, estimate

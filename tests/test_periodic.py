@@ -18,6 +18,7 @@ from studies.periodic import (
     harmonic_change,
     march,
     rev_harmonics,
+    richardson,
     rre_weights,
 )
 
@@ -121,3 +122,41 @@ def test_window_of_one_is_refused():
         check({**p, "extrapolation_window": 1})
     with pytest.raises(ParameterError, match="revolutions must not exceed max_revolutions"):
         check({**p, "revolutions": 11})
+
+
+def _rows(n: int, revs: int, t0: float, values) -> np.ndarray:
+    t = t0 + np.arange(1, n * revs + 1) / (n * OMEGA / (2 * np.pi))
+    return np.column_stack([t, values(t)])
+
+
+def test_richardson_removes_the_h2_term_exactly():
+    # a periodic response computed at h and 2h with an error a h² e(t) + b h⁴ g(t) (e, g
+    # band-limited to harmonics ≤ 8, as the archive's): the extrapolation leaves −4 b h⁴ g,
+    # the fine step's own h⁴ term times (1 − (16 − 1)/3)
+    a, b = 40.0, 3e3
+
+    def e(t):
+        psi = OMEGA * t
+        return np.column_stack([np.cos(3 * psi + 0.4) + 0.2, 0.3 * np.sin(8 * psi)])
+
+    def g(t):
+        return np.column_stack([np.sin(2 * OMEGA * t), np.cos(OMEGA * t)])
+
+    h = 1.0 / N
+    for bb in (0.0, b):
+        def computed(t, step, bb=bb):
+            return periodic_part(t) + a * step**2 * e(t) + bb * step**4 * g(t)
+
+        fine = _rows(N, 2, 3.25, lambda t: computed(t, h))
+        coarse = _rows(N // 2, 2, 1.5, lambda t: computed(t, 2 * h))
+        out, est = richardson(fine, coarse, OMEGA, 8)
+        err = out[:, 1:] - periodic_part(fine[:, 0])
+        expect = -4 * bb * h**4 * g(fine[:, 0])
+        assert np.abs(err - expect).max() < 1e-13
+        assert np.array_equal(out[:, 0], fine[:, 0])
+        # the estimate: the h² term's largest harmonic against the signal's largest harmonic
+        # at h (column 0: |c_3| = ½ a h² against the fine mean 2 + 0.2 a h², with the
+        # harmonics c_k of x = c_0 + 2 Re Σ c_k e^{ikψ})
+        assert est[0] == pytest.approx(0.5 * a * h**2 / (2.0 + 0.2 * a * h**2), rel=1e-12)
+    with pytest.raises(ValueError, match="whole revolutions at h and 2h"):
+        richardson(fine, fine, OMEGA, 8)
