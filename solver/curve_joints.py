@@ -24,12 +24,15 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from solver import curve_kernels as _kernels
 from solver.bodies import Body, PointMass, Scalar
 from solver.element import Element, ElementSet, dense_pattern
 from solver.state import StateBlock
 
 Array = NDArray[np.float64]
 _PAIRS = {0: (2, 1), 1: (0, 2), 2: (1, 0)}  # rotation about t, n, b (Eq. 22 rows)
+_NO_FRAME = np.zeros((0, 3, 3))  # frame arguments the kernels do not read
+_D2_STEP = 1e-6  # central-difference step in η of d²R*/dη² (the Hessian's ∂²/∂η²)
 
 
 class CurveSliding(Element):
@@ -120,7 +123,8 @@ class CurveSliding(Element):
 
 class CurveSlidingSet(ElementSet):
     """All curve sliding joints that share one curve, rotation set and kind of body ℓ,
-    evaluated together: one curve evaluation and a few einsums per call for J joints."""
+    evaluated together: one curve evaluation and one compiled loop over the J joints per call
+    (the arithmetic, with the formulas, is in :mod:`solver.curve_kernels`)."""
 
     def __init__(self, joints: list[CurveSliding], s) -> None:
         super().__init__(joints, s)
@@ -133,9 +137,9 @@ class CurveSlidingSet(ElementSet):
         self._eta0 = np.array([c[0] for c in contact])
         nj = len(js)
         self.nj = nj
-        self.ok = np.array([s.offset[j.body_k] for j in js])
-        self.ol = np.array([s.offset[j.body_l] for j in js])
-        self.ie = np.array([s.scalar_index[j.eta] for j in js])
+        self.ok = np.array([s.offset[j.body_k] for j in js], dtype=np.int64)
+        self.ol = np.array([s.offset[j.body_l] for j in js], dtype=np.int64)
+        self.ie = np.array([s.scalar_index[j.eta] for j in js], dtype=np.int64)
         self.Q = np.array([j.Q for j in js])
         self.o = np.array([j.o for j in js])
         self.b = np.array([c[1] for c in contact])
@@ -147,26 +151,15 @@ class CurveSlidingSet(ElementSet):
         self.mj = 3 + len(self.rot)
         self.cols = np.repeat(cols, self.mj, axis=0)  # (J·m, nc)
         self._cols_j = cols
-        self.xl, self.dl, self.je = 12, 15, self.nc - 1
-        eye = np.eye(3)
-        g0 = np.zeros((nj, self.mj, self.nc))
-        g0[:, :3, 0:3] = eye
-        g0[:, :3, self.xl : self.xl + 3] = -eye
-        if self.l_rigid:
-            for a in range(3):
-                g0[:, :3, self.dl + 3 * a : self.dl + 3 + 3 * a] = (
-                    -self.b[:, a, None, None] * eye)
-        self._g0 = g0
-        self._pr = np.tile(np.arange(3), 3)  # rows/cols of the p*_α I blocks
-        self._pc = 3 + np.arange(9)
+        self.xl, self.dl, self.je = _kernels.XL, _kernels.DL, self.nc - 1
         self._ra = np.array([_PAIRS[x][0] for x in self.rot], dtype=np.int64)
         self._rb = np.array([_PAIRS[x][1] for x in self.rot], dtype=np.int64)
+        self._planar = self.curve.plane_normal is not None
+        self._normal = (np.asarray(self.curve.plane_normal, dtype=float) if self._planar
+                        else np.zeros(3))
         self._memo_curve: dict = {}
         self._memo_eval: dict = {}
         self._structure(cols)
-        # W[j, r, β, γ] = R*_βa c_γb − R*_βb c_γa needs R*; precompute c columns per row
-        self._cb = self.c[:, :, self._rb]  # (J, 3, r): c_γ b_r
-        self._ca = self.c[:, :, self._ra]
 
     def _structure(self, cols: np.ndarray) -> None:
         """Structural non-zeros of the Jacobian rows and of the λ-weighted Hessian."""
@@ -203,86 +196,38 @@ class CurveSlidingSet(ElementSet):
     def row_owner(self, row: int, holonomic: bool = True) -> str:
         return self.joints[row // self.mj].name
 
-    def _pack(self, g: Array) -> Array:
-        return g.reshape(self.nj, self.mj, self.nc)[:, self._jr, self._jc].ravel()
-
     def constraint(self, q: Array, t: float) -> tuple[Array, Array]:
-        c, g = self.evaluate(q)
-        return c, self._pack(g)
+        return self.evaluate(q)
 
-    def _curve_state(self, eta: Array):
-        """p*, p*', p*'' (J, 3) and R*, dR*/dη (J, 3, 3) in body k frames, memoized."""
+    def _curve_state(self, eta: Array) -> tuple[Array, Array, Array, Array, Array]:
+        """p*, p*', p*'' (J, 3) in body k frames and the rotation rows' W, dW/dη (J, r, 3, 3)
+        (:func:`solver.curve_kernels.curve_state`), memoized: a Newton iteration meets the
+        same η at the start of the step and in the constraint values at its end."""
         key = eta.tobytes()
         hit = self._memo_curve.get(key)
         if hit is None:
             d = self.curve.derivatives(eta, 2)  # (3, J, 3)
-            qt = np.transpose(self.Q, (0, 2, 1))
-            p = self.o + np.einsum("ja,jab->jb", d[0], qt)
-            p1 = np.einsum("ja,jab->jb", d[1], qt)
-            p2 = np.einsum("ja,jab->jb", d[2], qt)
-            if self.rot and self.curve.plane_normal is not None:
-                # planar frame from the derivatives at hand (solver.curves convention):
-                # t = p'/|p'|, b = plane normal, n = b × t, t' = (p'' − t(t·p''))/|p'|
-                sp_ = np.linalg.norm(d[1], axis=-1, keepdims=True)
-                t = d[1] / sp_
-                bn = np.broadcast_to(self.curve.plane_normal, t.shape)
-                tp = (d[2] - t * np.sum(t * d[2], axis=-1, keepdims=True)) / sp_
-                r = np.stack([t, _cross(bn, t), bn], axis=-1)
-                dr = np.stack([tp, _cross(bn, tp), np.zeros_like(tp)], axis=-1)
-                r, dr = self.Q @ r, self.Q @ dr
-            elif self.rot:
+            if self.rot and not self._planar:
                 r, dr = self.curve.frame(eta)
-                r, dr = self.Q @ r, self.Q @ dr
-            else:
-                r = dr = None
-            if self.rot:  # the rotation rows' bilinear forms W(η) and dW/dη, reused per step
-                r, dr = (r, self._w(r)), (dr, self._w(dr))
-            hit = (p, p1, p2, r, dr)
+            else:  # the planar frame is built from d in the kernel
+                r = dr = _NO_FRAME
+            hit = _kernels.curve_state(d, r, dr, self.Q, self.o, self._normal, self._planar,
+                                       self.c, self._ra, self._rb)
             if len(self._memo_curve) > 16:
                 self._memo_curve.clear()
             self._memo_curve[key] = hit
         return hit
 
-    def _state(self, q: Array):
-        eta = q[self.ie]
-        p, p1, p2, r, dr = self._curve_state(eta)
-        dk = q[self.ok[:, None] + 3 + np.arange(9)].reshape(-1, 3, 3)  # rows d1, d2, d3
-        dl = (q[self.ol[:, None] + 3 + np.arange(9)].reshape(-1, 3, 3) if self.l_rigid
-              else None)
-        return eta, p, p1, p2, r, dr, dk, dl
-
-    def _w(self, r: Array) -> Array:
-        """W[j, r, β, γ] = R*_βa c_γb − R*_βb c_γa of the rotation rows (Eq. 23 bilinear form)."""
-        a, b = self._ra, self._rb
-        return (np.einsum("jbr,jgr->jrbg", r[:, :, a], self._cb)
-                - np.einsum("jbr,jgr->jrbg", r[:, :, b], self._ca))
-
     def evaluate(self, q: Array) -> tuple[Array, Array]:
+        """Constraint values (J·m,) and Jacobian values in pattern order (Eqs. 11 and 23),
+        memoized (the residual and the Newton matrix ask for both at the same q)."""
         key = q[self._cols_j].tobytes()
         hit = self._memo_eval.get(key)
         if hit is not None:
             return hit
-        _eta, p, p1, _, r, dr, dk, dl = self._state(q)
-        nj, mj = self.nj, self.mj
-        c = np.empty((nj, mj))
-        g = self._g0.copy()
-        xk = q[self.ok[:, None] + np.arange(3)]
-        xl = q[self.ol[:, None] + np.arange(3)]
-        # displacement constraints, Eq. (11)
-        c[:, :3] = xk + np.einsum("ja,jai->ji", p, dk) - xl
-        if self.l_rigid:
-            c[:, :3] -= np.einsum("ja,jai->ji", self.b, dl)
-        g[:, self._pr, self._pc] = np.repeat(p, 3, axis=1)  # ∂/∂d_α^k = p*_α I
-        g[:, :3, self.je] = np.einsum("ja,jai->ji", p1, dk)
-        if self.rot:
-            w, dw = r[1], dr[1]
-            x = dk @ np.transpose(dl, (0, 2, 1))  # X_βγ = d_β^k·d_γ^ℓ
-            c[:, 3:] = np.einsum("jrbg,jbg->jr", w, x)
-            g[:, 3:, 3:12] = np.einsum("jrbg,jgi->jrbi", w, dl).reshape(nj, -1, 9)
-            g[:, 3:, self.dl : self.dl + 9] = np.einsum("jrbg,jbi->jrgi", w, dk).reshape(
-                nj, -1, 9)
-            g[:, 3:, self.je] = np.einsum("jrbg,jbg->jr", dw, x)
-        out = (c.ravel(), g.reshape(nj * mj, self.nc))
+        p, p1, _, w, dw = self._curve_state(q[self.ie])
+        out = _kernels.evaluate(q, self.ok, self.ol, self.l_rigid, self.b, p, p1, w, dw,
+                                self._jr, self._jc, self.nc)
         if len(self._memo_eval) > 16:
             self._memo_eval.clear()
         self._memo_eval[key] = out
@@ -290,70 +235,27 @@ class CurveSlidingSet(ElementSet):
 
     def discrete_jacobian(self, qi: Array, qf: Array, ti: float = 0.0,
                           tf: float = 0.0) -> Array:
-        """Exact discrete derivative Ḡ with Ḡ·(q_f − q_i) = C(q_f) − C(q_i).
-
-        Product rule with averages and the secant of the curve (design note): Δ(p_α d_α) =
-        p̄_α Δd_α + d̄_α p̄'_α Δη with p̄' = (p(η_f) − p(η_i))/Δη; the rotation rows are
-        Σ W_βγ(η) d_β^k·d_γ^ℓ and use the secant of W likewise. Only the end points of the step
-        are evaluated, each once per Newton iteration.
-        """
-        ei, pi, p1i, _, ri, dri, dki, dli = self._state(qi)
-        ef, pf, p1f, _, rf, drf, dkf, dlf = self._state(qf)
-        de = ef - ei
-        small = np.abs(de) < 1e-9
-        safe = np.where(small, 1.0, de)
-        nj = self.nj
-        g = self._g0.copy()
-        pbar = 0.5 * (pi + pf)
-        sec = np.where(small[:, None], 0.5 * (p1i + p1f), (pf - pi) / safe[:, None])
-        dkbar = 0.5 * (dki + dkf)
-        g[:, self._pr, self._pc] = np.repeat(pbar, 3, axis=1)
-        g[:, :3, self.je] = np.einsum("ja,jai->ji", sec, dkbar)
-        if self.rot:
-            dlbar = 0.5 * (dli + dlf)
-            wi, wf = ri[1], rf[1]
-            dw = np.where(small[:, None, None, None], 0.5 * (dri[1] + drf[1]),
-                          (wf - wi) / safe[:, None, None, None])
-            wbar = 0.5 * (wi + wf)
-            xbar = 0.5 * (dki @ np.transpose(dli, (0, 2, 1)) + dkf @ np.transpose(dlf, (0, 2, 1)))
-            g[:, 3:, 3:12] = np.einsum("jrbg,jgi->jrbi", wbar, dlbar).reshape(nj, -1, 9)
-            g[:, 3:, self.dl : self.dl + 9] = np.einsum("jrbg,jbi->jrgi", wbar, dkbar).reshape(
-                nj, -1, 9)
-            g[:, 3:, self.je] = np.einsum("jrbg,jbg->jr", dw, xbar)
-        return self._pack(g)
+        """Exact discrete derivative Ḡ with Ḡ·(q_f − q_i) = C(q_f) − C(q_i): the secant of
+        the curve and of W (:func:`solver.curve_kernels.discrete_jacobian`). Only the end
+        points of the step are evaluated, each once per Newton iteration."""
+        pi, p1i, _, wi, dwi = self._curve_state(qi[self.ie])
+        pf, p1f, _, wf, dwf = self._curve_state(qf[self.ie])
+        return _kernels.discrete_jacobian(qi, qf, self.ok, self.ol, self.ie, self.l_rigid,
+                                          self.b, pi, p1i, wi, dwi, pf, p1f, wf, dwf,
+                                          self._jr, self._jc, self.nc)
 
     def constraint_hessian(self, q: Array, t: float, lam: Array) -> Array:
-        eta, _p, p1, p2, r, dr, dk, dl = self._state(q)
-        nj, nc, je = self.nj, self.nc, self.je
-        lam = lam.reshape(nj, self.mj)
-        ld = lam[:, :3]
-        h = np.zeros((nj, nc, nc))
-        # displacement rows: ∂²/∂η∂d_α^k = p*'_α I, ∂²/∂η² = Σ p*''_α d_α^k
-        h[:, je, 3:12] = (p1[:, :, None] * ld[:, None, :]).reshape(nj, 9)
-        h[:, je, je] = np.einsum("ji,ja,jai->j", ld, p2, dk)
-        if self.rot:
-            lr = lam[:, 3:]
-            w, dw = r[1], dr[1]
-            r, dr = r[0], dr[0]
-            h[:, je, 3:12] += np.einsum("jr,jrbg,jgi->jbi", lr, dw, dl).reshape(nj, 9)
-            h[:, je, self.dl : self.dl + 9] += np.einsum("jr,jrbg,jbi->jgi", lr, dw,
-                                                         dk).reshape(nj, 9)
-            # ∂²/∂η²: d²R*/dη² by a central difference of the exact first derivative
-            eps = 1e-6
-            drp = self.Q @ self.curve.frame(np.clip(eta + eps, 0, 1))[1]
-            drm = self.Q @ self.curve.frame(np.clip(eta - eps, 0, 1))[1]
-            d2w = self._w((drp - drm) / (2 * eps))
-            x = np.einsum("jbi,jgi->jbg", dk, dl)
-            h[:, je, je] += np.einsum("jr,jrbg,jbg->j", lr, d2w, x)
-            coef = np.einsum("jr,jrbg->jbg", lr, w)  # ∂²/∂d_β^k ∂d_γ^ℓ = coef_βγ I
-            blk = np.einsum("jbg,ik->jbigk", coef, np.eye(3)).reshape(nj, 9, 9)
-            h[:, 3:12, self.dl : self.dl + 9] += blk
-        # the blocks above were filled on one side of the diagonal: symmetrize
-        diag = np.einsum("jii->ji", h).copy()
-        h = h + np.transpose(h, (0, 2, 1))
-        idx = np.arange(nc)
-        h[:, idx, idx] = diag
-        return h[:, self._hr, self._hc].ravel()
+        """Σ_r λ_r ∂²C_r/∂q² (:func:`solver.curve_kernels.constraint_hessian`)."""
+        eta = q[self.ie]
+        _, p1, p2, w, dw = self._curve_state(eta)
+        if self.rot:  # d²R*/dη² by a central difference of the exact dR/dη
+            drp = self.curve.frame(np.clip(eta + _D2_STEP, 0, 1))[1]
+            drm = self.curve.frame(np.clip(eta - _D2_STEP, 0, 1))[1]
+        else:
+            drp = drm = _NO_FRAME
+        return _kernels.constraint_hessian(q, self.ok, self.ol, lam, p1, p2, w, dw, self.Q,
+                                           drp, drm, _D2_STEP, self.c, self._ra, self._rb,
+                                           self._hr, self._hc, self.nc)
 
 
 class ArcLength(Element):
