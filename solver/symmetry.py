@@ -43,7 +43,8 @@ class CyclicSymmetry:
         Owners that turn with the rotor but belong to no sector (the hub); all other owners are
         non-rotating and left as they are.
     axis
-        Rotor axis (unit vector, global frame); the rotor turns positively about it.
+        Rotor axis; the rotor turns positively about it. In the frame of ``centre`` when that
+        is a rigid body (the shaft head, whose axis tilts with the fuselage), else global.
     centre
         The owner whose first three coordinates are the centre the rotor turns about (e.g. the
         shaft head), or ``None`` for the fixed point ``point``.
@@ -105,32 +106,66 @@ class CyclicSymmetry:
         self._pos = lay.is_position[first]
         self.axis = np.asarray(axis, dtype=float) / np.linalg.norm(axis)
         self._centre = None if centre is None else lay.offset[centre]
+        # the axis is fixed in the centre body when it is a rigid body (12 coordinates x, d1,
+        # d2, d3): the shaft head carries the rotor axis
+        self._centre_triad = centre is not None and blocks[id(centre)].size == 12 and bool(
+            lay.is_position[self._centre]) and not lay.is_position[self._centre + 3 :
+                                                                   self._centre + 12].any()
         self._point = np.asarray(point, dtype=float)
 
-    def back(self, q: Array, v: Array, k: int = 1) -> tuple[Array, Array]:
+    def back(self, q: Array, *rates: Array, k: int = 1) -> tuple[Array, ...]:
         """The state k sector periods earlier on a symmetric response: the rotating parts
-        turned by −k·2π/N and each sector's coordinates moved to the sector ahead of it.
+        turned by −k·2π/N about the axis and each sector's coordinates moved to the sector
+        ahead of it.
 
-        On the periodic symmetric response, ``back(q(t + kT/N), v(t + kT/N), k)`` equals
+        On the periodic symmetric response, ``back(q(t + kT/N), v(t + kT/N), k=k)`` equals
         ``(q(t), v(t))``; ``k`` may be negative (the state k sector periods later).
+        ``rates`` are the velocities and, after them, any higher rates a scheme keeps
+        (accelerations), each of the layout's length.
+
+        With the axis fixed in a moving centre body (a shaft head on a bending fuselage) the
+        turn is R = D R₀ Dᵀ with D the body's triad: positions x → c + R(x − c), directors
+        d → R d, and the velocities follow exactly, ẋ → ċ + Ṙ(x − c) + R(ẋ − ċ),
+        ḋ → Ṙd + Rḋ with Ṙ from the body's director rates. Higher rates are turned by R
+        alone (they seed a scheme's history; the missing terms are of the order of the
+        centre's angular velocity, zero for a non-tilting shaft).
         """
         k = int(k) % self.n_sectors
         q = np.array(q, dtype=float)
-        v = np.array(v, dtype=float)
+        rates = tuple(np.array(r, dtype=float) for r in rates)
         for _ in range(k):
-            q, v = q[self._perm], v[self._perm]
-        rot = rotation_about(self.axis, -k * self.angle)
+            q = q[self._perm]
+            rates = tuple(r[self._perm] for r in rates)
+        r0 = rotation_about(self.axis, -k * self.angle)
         if self._centre is None:
-            c, cd = self._point, np.zeros(3)
+            c = self._point
+            rot, rot_dot = r0, np.zeros((3, 3))
         else:
-            c, cd = q[self._centre : self._centre + 3], v[self._centre : self._centre + 3]
-        for x, xc in ((q, c), (v, cd)):
-            vec = x[self._vec]  # (m, 3)
-            vec[self._pos] -= xc
-            vec = vec @ rot.T
-            vec[self._pos] += xc
-            x[self._vec] = vec
-        return q, v
+            o = self._centre
+            c = q[o : o + 3].copy()
+            if self._centre_triad:
+                d = q[o + 3 : o + 12].reshape(3, 3).T  # columns d1, d2, d3
+                rot = d @ r0 @ d.T
+                if rates:
+                    dd = rates[0][o + 3 : o + 12].reshape(3, 3).T
+                    rot_dot = dd @ r0 @ d.T + d @ r0 @ dd.T
+                else:
+                    rot_dot = np.zeros((3, 3))
+            else:
+                rot, rot_dot = r0, np.zeros((3, 3))
+        pos = self._pos
+        x0 = q[self._vec]  # (m, 3) the turned 3-vectors before the turn
+        rel = x0 - np.where(pos[:, None], c, 0.0)  # x − c for positions, d for directors
+        q[self._vec] = rel @ rot.T + np.where(pos[:, None], c, 0.0)
+        for n, r in enumerate(rates):
+            rc = (np.zeros(3) if self._centre is None
+                  else r[self._centre : self._centre + 3].copy())
+            shift = np.where(pos[:, None], rc, 0.0)
+            turned = (r[self._vec] - shift) @ rot.T + shift
+            if n == 0:
+                turned += rel @ rot_dot.T
+            r[self._vec] = turned
+        return (q, *rates)
 
 
 def director_triads(layout) -> NDArray[np.int64]:

@@ -117,9 +117,6 @@ def check(p: dict[str, Any]) -> None:
         raise ParameterError(f"steps_per_rev = {p['steps_per_rev']}: must be a multiple of "
                              f"{multiple} (shooting on the quarter-revolution map steps whole "
                              "quarter revolutions, Richardson also at twice the step)")
-    if p["shooting_window"] == 1:
-        raise ParameterError("shooting_window = 1: must be 0 (march only) or at least 2 "
-                             "(an extrapolation needs two changes)")
 
 
 def build(p: dict[str, Any]):

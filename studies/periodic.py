@@ -9,6 +9,11 @@ main rotor revolutions until a periodic solution was reached"). With an extrapol
 the periodic response is also estimated as the limit of the marched revolutions (reduced-rank
 extrapolation), which settles the rotor's slow lag and pendulum modes in a handful of
 revolutions instead of dozens (:func:`march`).
+
+:func:`shoot` goes further for models with a cyclic symmetry (four blades, four bifilars): it
+extrapolates the fixed point of the one-N-th-revolution map and restarts the model from it,
+so that the recorded revolutions are marched from a periodic state; :func:`richardson`
+extrapolates the harmonics of a periodic response computed at two time steps to zero step.
 """
 
 from __future__ import annotations
@@ -20,6 +25,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from solver.integrators import project_positions
+from solver.symmetry import affine_combination
 from studies.parameters import Param, ParameterError
 from studies.progress import report
 
@@ -53,13 +60,14 @@ PARAMETERS: dict[str, Param] = {
 
 
 def check(p: dict[str, Any]) -> None:
-    """Cross-checks of the marching parameters (:data:`PARAMETERS` and the model's own
-    ``revolutions`` and ``max_revolutions``)."""
+    """Cross-checks of the marching and shooting parameters (:data:`PARAMETERS`,
+    :data:`SHOOTING` and the model's own ``revolutions`` and ``max_revolutions``)."""
     if p["revolutions"] > p["max_revolutions"]:
         raise ParameterError("revolutions must not exceed max_revolutions")
-    if p["extrapolation_window"] == 1:
-        raise ParameterError("extrapolation_window = 1: must be 0 (march only) or at least 2 "
-                             "(an extrapolation needs two changes)")
+    for name in ("extrapolation_window", "shooting_window"):
+        if p.get(name) == 1:
+            raise ParameterError(f"{name} = 1: must be 0 (march only) or at least 2 (an "
+                                 "extrapolation needs two changes)")
 
 
 def rev_harmonics(block: Array, n_max: int = 8) -> NDArray[np.complex128]:
@@ -284,7 +292,7 @@ def _repeat(one: Array, revolutions: int) -> Array:
     return np.concatenate(reps)
 
 
-# The shooting parameters every periodic model declares (studies.hub).
+# The shooting parameters of the models with a cyclic symmetry (studies.hub, studies.rotor).
 SHOOTING: dict[str, Param] = {
     "shooting_window": Param(
         12, "1", "iterates of the sector map (one N-th of a revolution each, N the symmetry's "
@@ -357,9 +365,6 @@ def shoot(integ, sample: Callable[[], Array], signals: Callable[[Array], Array],
     RuntimeError
         If the response is not periodic after ``max_revolutions``.
     """
-    from solver.integrators import project_positions
-    from solver.symmetry import affine_combination
-
     n_sec = 1 if symmetry is None else symmetry.n_sectors
     if steps_per_rev % n_sec:
         raise ValueError(f"steps_per_rev = {steps_per_rev} must be a multiple of the "
@@ -367,12 +372,17 @@ def shoot(integ, sample: Callable[[], Array], signals: Callable[[Array], Array],
     m = steps_per_rev // n_sec
     step_once = stepper(integ, 2 * np.pi / (steps_per_rev * integ.h))
 
-    def back(q: Array, v: Array, k: int) -> tuple[Array, Array]:
-        return (q, v) if symmetry is None else symmetry.back(q, v, k)
+    # what the scheme carries from step to step besides q and v (generalized-α: its
+    # acceleration history), mapped and combined like the velocities
+    extra = [key for key in integ.STATE if key not in ("t", "q", "v", "lam", "nu")]
+
+    def snapshot() -> tuple[Array, ...]:  # the state at the phase of t = 0
+        arrays = (integ.q, integ.v, *(getattr(integ, key) for key in extra))
+        return arrays if symmetry is None else symmetry.back(*arrays, k=phase())
 
     blocks: list[Array] = []  # blocks since the last restart
     obs: list[Array] = []
-    states: list[tuple[Array, Array]] = []  # end states of the blocks, at phase 0
+    states: list[tuple[Array, ...]] = []  # end states of the blocks, at the phase of t = 0
     done = restarts = 0  # iterates done
     quarter = steps_per_rev * integ.h / n_sec  # s
 
@@ -411,11 +421,15 @@ def shoot(integ, sample: Callable[[], Array], signals: Callable[[Array], Array],
         if window < 2 or restarts == max_restarts:
             continue
         obs.append(observe(block, phase()))
-        states.append(back(integ.q, integ.v, phase()))  # at the phase of t = 0
+        states.append(snapshot())
         k = len(obs) - 1
         if k < 2:
             continue
-        scale = np.abs(obs[-1]).max(axis=0)
+        # each observed column on its own scale: its largest value, or with separate_mean its
+        # largest excursion from its mean (a steady force of kilonewtons must not hide the
+        # change of a vibratory one, as in the periodicity test)
+        ref = obs[-1] - obs[-1].mean(axis=0) if separate_mean else obs[-1]
+        scale = np.abs(ref).max(axis=0)
         live = scale > 0
         gamma, residual = rre_weights([o[:, live] / scale[live] for o in obs])
         # the part of the last change the extrapolation leaves unexplained, relative to the
@@ -432,6 +446,8 @@ def shoot(integ, sample: Callable[[], Array], signals: Callable[[Array], Array],
             continue
         q, v = affine_combination(system, gamma, [s[0] for s in states[1:]],
                                   [s[1] for s in states[1:]])
+        more = {key: gamma @ np.array([s[2 + i] for s in states[1:]])
+                for i, key in enumerate(extra)}
         # the estimate is a state of the phase of t = 0: restart at the next whole revolution
         # (the forcing and the driven rotation repeat), so that the revolutions recorded after
         # it start at ψ = 0 like a marched run's
@@ -441,13 +457,20 @@ def shoot(integ, sample: Callable[[], Array], signals: Callable[[Array], Array],
         # leave a velocity jump of (gap)/h as an undamped two-step mode, which slows every
         # later Newton solve; projecting the positions (not the velocities, whose normal part
         # is the scheme's own) avoids it
-        q = project_positions(system, q, t_restart)
+        try:
+            q = project_positions(system, q, t_restart)
+        except ValueError as exc:  # too far from the constraints: not a usable estimate
+            report(f"revolution {revs_done:g}: extrapolated state unusable ({exc}; weights up "
+                   f"to {np.abs(gamma).max():.3g}); marching on")
+            obs, states = obs[1:], states[1:]
+            continue
         state = integ.state()
-        state.update(t=t_restart, q=q, v=v)
+        state.update(t=t_restart, q=q, v=v, **more)
         integ.restore(state)
         restarts += 1
         report(f"revolution {revs_done:g}: restarted from the extrapolated periodic state "
-               f"(restart {restarts}, {k} iterates, unexplained part {residual:.3f})")
+               f"(restart {restarts}, {k} iterates, unexplained part {residual:.3f}, weights up "
+               f"to {np.abs(gamma).max():.3g})")
         blocks, obs, states = [], [], []
 
 

@@ -106,6 +106,16 @@ def test_hub_parameters_validated_before_running():
         SPEC.complete({"bifilar": "loose"})
     with pytest.raises(ParameterError, match="unknown parameter"):
         SPEC.complete({"tuning_ordr": 3.0})
+    # shooting steps whole quarter revolutions, Richardson also at twice the step
+    with pytest.raises(ParameterError, match="steps_per_rev = 164: must be a multiple of 8"):
+        SPEC.complete({"steps_per_rev": 164})
+    SPEC.complete({"steps_per_rev": 164, "richardson": False})
+    with pytest.raises(ParameterError, match="must be a multiple of 4"):
+        SPEC.complete({"steps_per_rev": 162, "richardson": False})
+    with pytest.raises(ParameterError, match="must be a multiple of 2"):
+        SPEC.complete({"steps_per_rev": 161, "shooting_window": 0})
+    with pytest.raises(ParameterError, match="shooting_window = 1"):
+        SPEC.complete({"shooting_window": 1})
 
 
 def test_hub_model_has_no_redundant_constraints():

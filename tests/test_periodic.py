@@ -120,6 +120,8 @@ def test_window_of_one_is_refused():
     check(p)
     with pytest.raises(ParameterError, match="extrapolation_window = 1"):
         check({**p, "extrapolation_window": 1})
+    with pytest.raises(ParameterError, match="shooting_window = 1"):
+        check({**p, "shooting_window": 1})
     with pytest.raises(ParameterError, match="revolutions must not exceed max_revolutions"):
         check({**p, "revolutions": 11})
 
