@@ -173,6 +173,22 @@ def _fixed_entries(g: Array, b: Array, j: int, l_rigid: bool) -> None:
 
 
 @njit(cache=True)
+def _rotation_row(g: Array, row: int, w: Array, dk: Array, dl: Array) -> None:
+    """The director columns of one rotation row Σ_βγ W_βγ d_β^k·d_γ^ℓ (Eq. 23): ∂/∂d_β^k =
+    Σ_γ W_βγ d_γ^ℓ and ∂/∂d_γ^ℓ = Σ_β W_βγ d_β^k (with W, d^k, d^ℓ at a point, or their
+    averages over a step for the discrete derivative)."""
+    for be in range(3):
+        for i in range(3):
+            sk = 0.0
+            sl = 0.0
+            for ga in range(3):
+                sk += w[be, ga] * dl[ga, i]
+                sl += w[ga, be] * dk[ga, i]
+            g[row, 3 + 3 * be + i] = sk
+            g[row, DL + 3 * be + i] = sl
+
+
+@njit(cache=True)
 def _gather(g: Array, jr: IArray, jc: IArray, out: Array, start: int) -> None:
     """Copy the structural entries (jr, jc) of one joint's dense block into the flat values."""
     for k in range(jr.shape[0]):
@@ -242,15 +258,7 @@ def evaluate(q: Array, ok: IArray, ol: IArray, l_rigid: bool, b: Array, p: Array
                         s1 += dw[j, k, be, ga] * x[be, ga]
                 c[j * mj + 3 + k] = s
                 g[3 + k, je] = s1
-                for be in range(3):
-                    for i in range(3):
-                        sk = 0.0
-                        sl = 0.0
-                        for ga in range(3):
-                            sk += w[j, k, be, ga] * dl[ga, i]
-                            sl += w[j, k, ga, be] * dk[ga, i]
-                        g[3 + k, 3 + 3 * be + i] = sk
-                        g[3 + k, DL + 3 * be + i] = sl
+                _rotation_row(g, 3 + k, w[j, k], dk, dl)
         _gather(g, jr, jc, vals, j * npj)
     return c, vals
 
@@ -286,6 +294,7 @@ def discrete_jacobian(qi: Array, qf: Array, ok: IArray, ol: IArray, ie: IArray, 
     dkbar = np.empty((3, 3))
     dlbar = np.empty((3, 3))
     xbar = np.empty((3, 3))
+    wbar = np.empty((3, 3))
     for j in range(nj):
         de = qf[ie[j]] - qi[ie[j]]
         small = abs(de) < 1e-9
@@ -325,14 +334,9 @@ def discrete_jacobian(qi: Array, qf: Array, ok: IArray, ol: IArray, ie: IArray, 
                         s += dwk * xbar[be, ga]
                 g[3 + k, je] = s
                 for be in range(3):
-                    for i in range(3):
-                        sk = 0.0
-                        sl = 0.0
-                        for ga in range(3):
-                            sk += 0.5 * (wi[j, k, be, ga] + wf[j, k, be, ga]) * dlbar[ga, i]
-                            sl += 0.5 * (wi[j, k, ga, be] + wf[j, k, ga, be]) * dkbar[ga, i]
-                        g[3 + k, 3 + 3 * be + i] = sk
-                        g[3 + k, DL + 3 * be + i] = sl
+                    for ga in range(3):
+                        wbar[be, ga] = 0.5 * (wi[j, k, be, ga] + wf[j, k, be, ga])
+                _rotation_row(g, 3 + k, wbar, dkbar, dlbar)
         _gather(g, jr, jc, vals, j * npj)
     return vals
 
