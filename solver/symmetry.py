@@ -1,19 +1,20 @@
 """Cyclic symmetry of a model: a rotation by 2π/N about an axis that permutes N identical sectors.
 
 A rotor with N identical blades (or absorbers) spinning at Ω under loads that are periodic
-with T/N in the non-rotating frame has a steady response with the same symmetry: the state of
-sector j + 1 at time t + T/N is the state of sector j at t, turned by 2π/N about the rotor axis,
-while the non-rotating parts (shaft head, fuselage, inflow) repeat with period T/N. The map
-from t to t + T/N followed by the inverse turn-and-permute, :meth:`CyclicSymmetry.back`, is
-then a map of one N-th of a revolution whose fixed point is the periodic response: a shooting
-or a marching on it sees N iterates per revolution (Peters & Barwey; the "quarter-revolution
-map with blade permutation" of a four-bladed rotor).
+with T/N in the non-rotating frame has a steady response with the same symmetry: at t + T/N
+sector j stands where sector j + 1 stood at t and does what it did there (its global
+coordinates are sector j + 1's at t), the hub has turned by 2π/N, and the non-rotating parts
+(shaft head, fuselage, inflow) repeat with period T/N. The map from t to t + T/N followed by
+the inverse, :meth:`CyclicSymmetry.back` (each sector's coordinates moved to the next sector's
+slot, the hub turned back by 2π/N), is then a map of one N-th of a revolution whose fixed
+point is the periodic response: a shooting or a marching on it sees N iterates per revolution
+(Peters & Barwey; the "quarter-revolution map with blade permutation" of a four-bladed rotor).
 
-The turn acts on the coordinates as a rigid rotation of the rotating parts about the axis
-through a centre that may move (the shaft head): positions p → c + R(p − c), directors
-d → R d, and their rates ṗ → ċ + R(ṗ − ċ), ḋ → R ḋ. It preserves every constraint between
-the rotating parts and between them and the centre's body, and, in a driven rotation
-ψ = Ωt, turns the state at t + T/N into one consistent at t.
+The turn acts on the rotating parts that belong to no sector as a rigid rotation about the
+axis through a centre that may move (the shaft head): positions p → c + R(p − c), directors
+d → R d, and their rates ṗ → ċ + R(ṗ − ċ), ḋ → R ḋ (plus Ṙ terms when the axis tilts). It
+preserves every constraint between the rotating parts and between them and the centre's body,
+and, in a driven rotation ψ = Ωt, turns the state at t + T/N into one consistent at t.
 """
 
 from __future__ import annotations
