@@ -146,12 +146,12 @@ def test_shooting_gives_the_long_march_periodic_response():
     assert np.max(np.abs(a - b) / scale) < 1e-3
     assert shot.attrs["transient_revolutions"] + shot.attrs["revolutions"] <= 8
     assert shot.attrs["shooting_restarts"] >= 1 and shot.attrs["message"] == ""
-    # the steady response is symmetric: a quarter revolution later, bifilar j + 1 does what
-    # bifilar j did (pin angles, degrees), within the periodicity
+    # the steady response is symmetric: a quarter revolution later, bifilar j does what
+    # bifilar j + 1 did (pin angles, degrees), within the periodicity (measured 2.2e-4)
     pins = shot["pin_angle"].values[:, -n:]
     quarter = n // 4
-    moved = np.roll(pins, -1, axis=0)[:, quarter:]
-    assert np.abs(moved - pins[:, :-quarter]).max() < 2e-3 * np.abs(pins).max()
+    earlier = np.roll(pins, -1, axis=0)[:, :-quarter]  # row j: bifilar j + 1, a quarter before
+    assert np.abs(earlier - pins[:, quarter:]).max() < 2e-3 * np.abs(pins).max()
 
 
 def test_locked_hub_shoots_in_a_few_revolutions():
