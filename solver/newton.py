@@ -9,13 +9,14 @@ cheaper, iterations; the factors are refreshed as soon as the contraction slows 
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
+
+from solver.sparse_lu import RefactorLU
 
 NEWTON_MAXITER = 30  # Maximum number of Newton iterations per step.
 SLOW_RATE = 0.25  # Contraction rate above which the LU factors are refreshed.
@@ -40,25 +41,29 @@ class NewtonResult:
 
 
 class LinearSolver:
-    """Holds LU factors between calls so a later solve can reuse them."""
+    """Holds LU factors between calls so a later solve can reuse them.
+
+    ``lu`` has ``solve(b)`` after a successful :meth:`factor`, and is None after a failed one.
+    Matrices of one sparsity pattern are refactored with the pivot order of the first
+    (:class:`solver.sparse_lu.RefactorLU`).
+    """
 
     def __init__(self) -> None:
-        self.lu = None
+        self.lu: RefactorLU | None = None
+        self._factors = RefactorLU()
 
     def factor(self, mat) -> str | None:
+        self.lu = None
         try:
-            with warnings.catch_warnings():
-                warnings.simplefilter("error", spla.MatrixRankWarning)
-                self.lu = spla.splu(mat.tocsc(), permc_spec="COLAMD")
+            self._factors.factor(mat)
         except (RuntimeError, spla.MatrixRankWarning) as exc:
-            self.lu = None
             return _singular(str(exc))
         # a zero pivot that roundoff left at 1e-16 is still a zero pivot (whether it comes
         # out exactly zero depends on the order of the sums that built the matrix)
-        d = np.abs(self.lu.U.diagonal())
+        d = np.abs(self._factors.diagonal)
         if d.size and d.min() <= PIVOT_RATIO * d.max():
-            self.lu = None
             return _singular(f"pivot {d.min():.1e} against {d.max():.1e}")
+        self.lu = self._factors
         return None
 
 
