@@ -18,6 +18,40 @@ from numpy.typing import NDArray
 from solver.element import ElementSet
 from solver.timefunctions import TimeFunction, constant
 
+try:
+    from numba import njit
+except ImportError as exc:  # a hard dependency: say how to get it
+    raise ImportError("bifilar's compiled kernels need numba: pip install 'numba>=0.59' "
+                      "(a wheel for every supported platform is on PyPI)") from exc
+
+
+@njit(cache=True)
+def _evaluate(q, m, h, h_row, h_i, h_j, g, g_row, g_k, c, c_row, jac):
+    """C(q) of every row, and (if ``jac`` is not empty) the Jacobian values in pattern order
+    (h q_j at (row, i), h q_i at (row, j), g at (row, k)), in one pass. The three kinds of
+    term are summed separately and then added, in the order of three ``np.bincount`` calls
+    (the NumPy form this replaced, to the bit)."""
+    quad = np.zeros(m)
+    lin = np.zeros(m)
+    const = np.zeros(m)
+    nh = len(h)
+    for e in range(nh):
+        a = h[e] * q[h_i[e]]
+        quad[h_row[e]] += a * q[h_j[e]]
+        if len(jac):
+            jac[e] = h[e] * q[h_j[e]]
+            jac[nh + e] = a
+    for e in range(len(g)):
+        lin[g_row[e]] += g[e] * q[g_k[e]]
+        if len(jac):
+            jac[2 * nh + e] = g[e]
+    for e in range(len(c)):
+        const[c_row[e]] += c[e]
+    out = np.empty(m)
+    for r in range(m):
+        out[r] = quad[r] + lin[r] + const[r]
+    return out
+
 
 @dataclass
 class VecExpr:
@@ -114,10 +148,11 @@ class QuadraticConstraints:
         g = np.array(b.g, dtype=float).reshape(-1, 4)
         c = np.array(b.c, dtype=float).reshape(-1, 3)
         self.h_row, self.h_i, self.h_j = (h[:, k].astype(np.int64) for k in range(3))
-        self.h_val, self.h_fun = h[:, 3], h[:, 4].astype(np.int64)
+        self.h_val, self.h_fun = h[:, 3].copy(), h[:, 4].astype(np.int64)
         self.g_row, self.g_k = g[:, 0].astype(np.int64), g[:, 1].astype(np.int64)
-        self.g_val, self.g_fun = g[:, 2], g[:, 3].astype(np.int64)
-        self.c_row, self.c_val, self.c_fun = c[:, 0].astype(np.int64), c[:, 1], c[:, 2].astype(int)
+        self.g_val, self.g_fun = g[:, 2].copy(), g[:, 3].astype(np.int64)
+        self.c_row, self.c_fun = c[:, 0].astype(np.int64), c[:, 2].astype(int)
+        self.c_val = c[:, 1].copy()
         self.time_dependent = len(self.funcs) > 1
         # Jacobian pattern: (row, i) with value h q_j, (row, j) with value h q_i, (row, k) with g.
         self.jac_rows = np.concatenate([self.h_row, self.h_row, self.g_row])
@@ -126,6 +161,7 @@ class QuadraticConstraints:
         self.hess_rows = np.concatenate([self.h_i, self.h_j])
         self.hess_cols = np.concatenate([self.h_j, self.h_i])
         self._w_cache: dict[float, NDArray[np.float64]] = {}
+        self._no_jac = np.zeros(0)
 
     def weights(self, t: float, order: int = 0) -> NDArray[np.float64]:
         """Values (order 0), rates (1) or second derivatives (2) of the time functions."""
@@ -147,12 +183,17 @@ class QuadraticConstraints:
 
     def value(self, q: NDArray[np.float64], t: float, order: int = 0) -> NDArray[np.float64]:
         """C(q, t) (order 0) or its partial time derivatives ∂ⁿC/∂tⁿ at fixed q."""
+        return self._evaluate(q, t, order, self._no_jac)
+
+    def value_and_jacobian(self, q: NDArray[np.float64], t: float):
+        """C(q, t) and the Jacobian values at the (jac_rows, jac_cols) pattern, in one pass."""
+        jac = np.empty(len(self.jac_rows))
+        return self._evaluate(q, t, 0, jac), jac
+
+    def _evaluate(self, q, t, order, jac):
         h, g, c = self._scaled(t, order)
-        out = np.zeros(self.m)
-        out += np.bincount(self.h_row, h * q[self.h_i] * q[self.h_j], minlength=self.m)
-        out += np.bincount(self.g_row, g * q[self.g_k], minlength=self.m)
-        out += np.bincount(self.c_row, c, minlength=self.m)
-        return out
+        return _evaluate(np.ascontiguousarray(q, dtype=float), self.m, h, self.h_row, self.h_i,
+                         self.h_j, g, self.g_row, self.g_k, c, self.c_row, jac)
 
     def jacobian_values(self, q: NDArray[np.float64], t: float, order: int = 0):
         """Values at the (jac_rows, jac_cols) pattern of ∂C/∂q (or of ∂/∂q ∂ⁿC/∂tⁿ)."""
@@ -212,7 +253,7 @@ class QuadraticSet(ElementSet):
         return self.elements[int(self._owner[row])].name
 
     def constraint(self, q, t):
-        return self.quad.value(q, t), self.quad.jacobian_values(q, t)
+        return self.quad.value_and_jacobian(q, t)
 
     def constraint_value(self, q, t):
         return self.quad.value(q, t)

@@ -18,6 +18,12 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
 
+try:
+    from numba import njit
+except ImportError as exc:  # a hard dependency: say how to get it
+    raise ImportError("bifilar's compiled kernels need numba: pip install 'numba>=0.59' "
+                      "(a wheel for every supported platform is on PyPI)") from exc
+
 from solver.bodies import PointMass, PrescribedBody, RigidBody, Scalar
 from solver.element import ElementSet, group_elements
 from solver.quadratic import QuadraticSet, VecExpr
@@ -27,6 +33,20 @@ Array = NDArray[np.float64]
 BODY_TYPES = (RigidBody, PointMass, PrescribedBody)
 # Blocks of the Newton matrix, in pattern order.
 BLOCKS = ("M", "A1", "K", "Dq", "Dv", "Da", "H", "GT", "G", "AT", "A")
+
+
+@njit(cache=True)
+def _csr_matvec(indptr, indices, data, x):
+    """A x for A in CSR, summed in scipy's order (the same bits as ``A @ x``) without its
+    per-call cost (about 5 µs, several times the product on a model's mass matrix)."""
+    n = len(indptr) - 1
+    out = np.empty(n)
+    for i in range(n):
+        acc = 0.0
+        for p in range(indptr[i], indptr[i + 1]):
+            acc += data[p] * x[indices[p]]
+        out[i] = acc
+    return out
 
 
 class System:
@@ -214,8 +234,13 @@ class System:
         return sp.csc_matrix((vals, self._indices, self._indptr), shape=(self.N, self.N))
 
     # ------------------------------------------------------------------ physics kernels
+    def mass_mul(self, v: Array) -> Array:
+        """M v (M the second-order mass matrix)."""
+        m = self.M
+        return _csr_matvec(m.indptr, m.indices, m.data, np.ascontiguousarray(v, dtype=float))
+
     def kinetic(self, v: Array) -> float:
-        return 0.5 * float(v @ (self.M @ v))
+        return 0.5 * float(v @ self.mass_mul(v))
 
     def potential(self, q: Array) -> float:
         return float(sum(s.potential(q) for s in self.potential_sets))
