@@ -16,6 +16,7 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import ArrayLike, NDArray
 
+from solver import rotation_kernels as _rk
 from solver.beams import Beam
 from solver.bodies import Body, PointMass, PrescribedBody
 from solver.element import EMPTY_F, Element, ElementSet
@@ -256,9 +257,11 @@ class RelativeRotation(Element):
 
 
 class RelativeRotationSet(ElementSet):
-    """Rotational springs and dampers, vectorized: with e_i^a, e_i^b the joint triad carried
-    by each body, c = e1ᵃ·e1ᵇ and s = −e1ᵃ·e2ᵇ are bilinear in the directors and
-    φ = atan2(s, c) (unwrapped against the last converged step)."""
+    """Rotational springs and dampers, evaluated together: with e_i^a, e_i^b the joint triad
+    carried by each body, c = e1ᵃ·e1ᵇ and s = −e1ᵃ·e2ᵇ are bilinear in the directors and
+    φ = atan2(s, c) (unwrapped against the last converged step). φ's gradient and Hessian
+    and the damper's tangent are one compiled loop each (:mod:`solver.rotation_kernels`,
+    with the formulas)."""
 
     def __init__(self, elements, system) -> None:
         from solver.joints import _triad
@@ -287,7 +290,18 @@ class RelativeRotationSet(ElementSet):
             ia = np.array([system.offset[e.body_a] + 3 + _director_cols(self._aa)
                            for e in elements])
             self.idx = np.concatenate([ia, ib], axis=1)
+        self.idx = self.idx.astype(np.int64)
         self._nb = ib.shape[1]
+        # the kernels' arguments (solver.rotation_kernels): coefficients on the active
+        # directors only, contiguous; unused ones empty
+        self._kb1 = np.ascontiguousarray(self._cb1[:, self._ab])
+        self._kb2 = np.ascontiguousarray(self._cb2[:, self._ab])
+        if self.grounded:
+            self._na, self._ka1, self._kea = 0, np.zeros((nj, 0)), self._ea
+        else:
+            self._na = 3 * len(self._aa)
+            self._ka1 = np.ascontiguousarray(self._ca1[:, self._aa])
+            self._kea = np.zeros((nj, 3))
         self.k = np.array([e.stiffness for e in elements])
         self.c = np.array([e.damping for e in elements])
         self.phi0 = np.array([e.phi0 for e in elements])
@@ -340,64 +354,25 @@ class RelativeRotationSet(ElementSet):
                           + self.b[j] * (rate[j] - np.interp(td, self._ht, self._hrate[:, j])))
         return moment
 
-    def _bilinear(self, q):
-        """c = e1ᵃ·e1ᵇ and s = −e1ᵃ·e2ᵇ (J,), bilinear in the directors, and their gradients
-        over ``idx`` (J, k): body a's active directors, then body b's."""
-        nj = len(self.k)
-        ab = self._ab
-        db = q[self.idx[:, -self._nb :]].reshape(nj, len(ab), 3)  # active directors of b
-        cb1, cb2 = self._cb1[:, ab], self._cb2[:, ab]
-        eb1 = np.einsum("ja,jai->ji", cb1, db)
-        eb2 = np.einsum("ja,jai->ji", cb2, db)
-        if self.grounded:
-            ea = self._ea
-        else:
-            ca1 = self._ca1[:, self._aa]
-            da = q[self.idx[:, : 3 * len(self._aa)]].reshape(nj, len(self._aa), 3)
-            ea = np.einsum("ja,jai->ji", ca1, da)
-        c = np.einsum("ji,ji->j", ea, eb1)
-        s = -np.einsum("ji,ji->j", ea, eb2)
-        dc = (cb1[:, :, None] * ea[:, None, :]).reshape(nj, -1)
-        ds = (-cb2[:, :, None] * ea[:, None, :]).reshape(nj, -1)
-        if not self.grounded:
-            dc = np.concatenate([(ca1[:, :, None] * eb1[:, None, :]).reshape(nj, -1), dc], 1)
-            ds = np.concatenate([(-ca1[:, :, None] * eb2[:, None, :]).reshape(nj, -1), ds], 1)
-        return c, s, dc, ds
-
     def _angle(self, c, s):
         """φ = atan2(s, c), unwrapped against the last converged step."""
         phi = np.arctan2(s, c)
         return self._ref + np.angle(np.exp(1j * (phi - self._ref)))
 
+    def _args(self, q):
+        return (q, self.idx, self._na, self._kb1, self._kb2, self._ka1, self._kea,
+                self.grounded)
+
     def _phi_grad(self, q):
-        """φ (J,) unwrapped against the last converged step, and ∇φ = (c∇s − s∇c)/r² at
-        ``idx`` (J, k)."""
-        c, s, dc, ds = self._bilinear(q)
-        g = (c[:, None] * ds - s[:, None] * dc) / (c * c + s * s)[:, None]
+        """φ (J,) unwrapped against the last converged step, and ∇φ at ``idx`` (J, k)
+        (:func:`solver.rotation_kernels.phi_grad`)."""
+        c, s, g = _rk.phi_grad(*self._args(q))
         return self._angle(c, s), g
 
     def _phi_hessian(self, q):
-        """φ, ∇φ (J, k) and the Hessian ∇²φ (J, k, k) over ``idx``: with ∂²c/∂dᵃ_α∂dᵇ_β =
-        ca_α cb1_β I3 (and likewise s with −cb2),
-        ∇²φ = [∇s∇cᵀ − ∇c∇sᵀ + c∇²s − s∇²c − 2∇φ(c∇c + s∇s)ᵀ]/r², r² = c² + s²."""
-        c, s, dc, ds = self._bilinear(q)
-        nj, k = dc.shape
-        hc = np.zeros((nj, k, k))
-        hs = np.zeros((nj, k, k))
-        if not self.grounded:
-            ca1, ab = self._ca1[:, self._aa], self._ab
-            na = 3 * len(self._aa)
-            eye = np.eye(3)
-            for h_, cb in ((hc, self._cb1[:, ab]), (hs, -self._cb2[:, ab])):
-                x = np.einsum("ja,jb,ik->jaibk", ca1, cb, eye).reshape(nj, na, -1)
-                h_[:, :na, na:] = x
-                h_[:, na:, :na] = np.swapaxes(x, 1, 2)
-        r2 = c * c + s * s
-        g = (c[:, None] * ds - s[:, None] * dc) / r2[:, None]
-        outer = ds[:, :, None] * dc[:, None, :] - dc[:, :, None] * ds[:, None, :]
-        w = c[:, None] * dc + s[:, None] * ds
-        hess = (outer + c[:, None, None] * hs - s[:, None, None] * hc
-                - 2.0 * g[:, :, None] * w[:, None, :]) / r2[:, None, None]
+        """φ, ∇φ (J, k) and the Hessian ∇²φ (J, k, k) over ``idx``
+        (:func:`solver.rotation_kernels.phi_hessian`)."""
+        c, s, g, hess = _rk.phi_hessian(*self._args(q))
         return self._angle(c, s), g, hess
 
     def _energies(self, q):
@@ -435,7 +410,8 @@ class RelativeRotationSet(ElementSet):
         # rotation with the bodies matters in a rotating frame: leaving it out cost a
         # rotor's Newton its convergence.)
         phi, g, hess = self._phi_hessian(q)
-        rate = np.einsum("jk,jk->j", g, v[self.idx])
+        vi = v[self.idx]
+        rate = np.einsum("jk,jk->j", g, vi)
         damp, stiff = self.c.copy(), np.zeros(len(self.c))
         moment = -self.c * rate
         if self._fb:
@@ -443,11 +419,7 @@ class RelativeRotationSet(ElementSet):
             damp += on * self.b
             stiff += on * self.a
             moment += self._feedback(t, phi, rate)
-        ggt = g[:, :, None] * g[:, None, :]
-        hv = np.einsum("jkl,jl->jk", hess, v[self.idx])
-        fq = (-damp[:, None, None] * g[:, :, None] * hv[:, None, :]
-              - stiff[:, None, None] * ggt + moment[:, None, None] * hess)
-        return fq.ravel(), (-damp[:, None, None] * ggt).ravel()
+        return _rk.damper_jacobians(g, hess, vi, damp, stiff, moment)
 
 
 def _active(*coefs: Array) -> NDArray[np.int64]:
