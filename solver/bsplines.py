@@ -135,6 +135,17 @@ def bspline_derivatives(knots: Array, coef: Array, degree: int, x: Array, order:
                      np.ascontiguousarray(x, dtype=float), int(order))
 
 
+@njit(cache=True)
+def nurbs_eval(knots: Array, hom: Array, degree: int, x: Array, order: int,
+               rational: bool) -> Array:
+    """:func:`nurbs_derivatives` for contiguous float arrays, callable from other compiled
+    kernels (which then evaluate a curve without a trip through the interpreter)."""
+    d = _evaluate(knots, hom, degree, x, order)
+    if rational:
+        return _rational(d)
+    return d
+
+
 def nurbs_derivatives(knots: Array, hom: Array, degree: int, x: Array, order: int,
                       rational: bool) -> Array:
     """Point and derivatives of a NURBS curve from its homogeneous coefficients.
@@ -142,5 +153,6 @@ def nurbs_derivatives(knots: Array, hom: Array, degree: int, x: Array, order: in
     ``hom`` is (n, dim + 1) with rows (w_i P_i, w_i) if ``rational``, else (n, dim) with the
     control points P_i. Returns (order + 1, N, dim): ``p^(j)`` for j = 0..order.
     """
-    d = bspline_derivatives(knots, hom, degree, x, order)
-    return _rational(d) if rational else d
+    return nurbs_eval(np.ascontiguousarray(knots, dtype=float),
+                      np.ascontiguousarray(hom, dtype=float), int(degree),
+                      np.ascontiguousarray(x, dtype=float), int(order), bool(rational))

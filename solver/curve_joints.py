@@ -206,13 +206,12 @@ class CurveSlidingSet(ElementSet):
         key = eta.tobytes()
         hit = self._memo_curve.get(key)
         if hit is None:
-            d = self.curve.derivatives(eta, 2)  # (3, J, 3)
             if self.rot and not self._planar:
                 r, dr = self.curve.frame(eta)
-            else:  # the planar frame is built from d in the kernel
+            else:  # the planar frame is built in the kernel from the curve's p', p''
                 r = dr = _NO_FRAME
-            hit = _kernels.curve_state(d, r, dr, self.Q, self.o, self._normal, self._planar,
-                                       self.c, self._ra, self._rb)
+            hit = _kernels.curve_state(*self.curve.spline, eta, r, dr, self.Q, self.o,
+                                       self._normal, self._planar, self.c, self._ra, self._rb)
             if len(self._memo_curve) > 16:
                 self._memo_curve.clear()
             self._memo_curve[key] = hit
@@ -248,7 +247,10 @@ class CurveSlidingSet(ElementSet):
         """Σ_r λ_r ∂²C_r/∂q² (:func:`solver.curve_kernels.constraint_hessian`)."""
         eta = q[self.ie]
         _, p1, p2, w, dw = self._curve_state(eta)
-        if self.rot:  # d²R*/dη² by a central difference of the exact dR/dη
+        if self.rot and self._planar:  # d²R*/dη² by a central difference of the exact dR/dη
+            drp = _kernels.planar_dframe(*self.curve.spline, eta + _D2_STEP, self._normal)
+            drm = _kernels.planar_dframe(*self.curve.spline, eta - _D2_STEP, self._normal)
+        elif self.rot:
             drp = self.curve.frame(np.clip(eta + _D2_STEP, 0, 1))[1]
             drm = self.curve.frame(np.clip(eta - _D2_STEP, 0, 1))[1]
         else:
@@ -330,29 +332,29 @@ class _RelationSet(ElementSet):
 
 
 class ArcLengthSet(_RelationSet):
-    """All :class:`ArcLength` relations on one curve, vectorized."""
+    """All :class:`ArcLength` relations on one curve, evaluated together: one compiled call
+    (:func:`solver.curve_kernels.arc_length_matrix`, ``arc_length_derivative``) that evaluates
+    the curve and the rows."""
 
     def __init__(self, arcs: list[ArcLength], sys) -> None:
         super().__init__(arcs, sys)
         self.curve = arcs[0].joint.curve
-        self.i_e = np.array([sys.scalar_index[a.joint.eta] for a in arcs])
+        self.i_e = np.array([sys.scalar_index[a.joint.eta] for a in arcs], dtype=np.int64)
         self._rows(np.array([[sys.scalar_index[a.s], sys.scalar_index[a.joint.eta]]
                              for a in arcs], dtype=np.int64))
 
     def matrix(self, q: Array) -> Array:
-        sp_ = np.linalg.norm(self.curve.derivatives(q[self.i_e], 1)[1], axis=-1)
-        return np.stack([np.ones_like(sp_), -sp_], axis=1)
+        """Rows (J, 2) of ṡ − |p*'(η)| η̇ = 0 over (s, η)."""
+        return _kernels.arc_length_matrix(*self.curve.spline, q, self.i_e)
 
     def derivative(self, q: Array, dq: Array) -> Array:
-        d = self.curve.derivatives(q[self.i_e], 2)
-        sp_ = np.linalg.norm(d[1], axis=-1)
-        out = np.zeros((len(self.i_e), 2))
-        out[:, 1] = -np.sum(d[1] * d[2], axis=-1) / sp_ * dq[self.i_e]
-        return out
+        """∂(A(q)·dq)/∂q (J, 2) over (s, η)."""
+        return _kernels.arc_length_derivative(*self.curve.spline, q, dq, self.i_e)
 
 
 class RollingSet(_RelationSet):
-    """All :class:`Rolling` relations of a model, vectorized."""
+    """All :class:`Rolling` relations of a model, evaluated together in one compiled call
+    (:func:`solver.curve_kernels.rolling_matrix`, ``rolling_derivative``, with the formulas)."""
 
     def __init__(self, rolls: list[Rolling], sys) -> None:
         super().__init__(rolls, sys)
@@ -362,47 +364,21 @@ class RollingSet(_RelationSet):
         self.il = ol[:, None] + 3 + np.arange(9)
         i_s = np.array([sys.scalar_index[r.arc.s] for r in rolls])
         self._rows(np.concatenate([i_s[:, None], self.ip, self.il], axis=1).astype(np.int64))
-        self.k = np.array([0.5 * r.side * r.r for r in rolls])[:, None, None]
+        self._op = (op + 3).astype(np.int64)  # first director of the pin and of the link
+        self._ol = (ol + 3).astype(np.int64)
+        self.k = np.array([0.5 * r.side * r.r for r in rolls])  # ½ σ r (m)
         self.axis = np.array([r.axis for r in rolls])
 
-    def _get(self, q):
-        dp = q[self.ip].reshape(-1, 3, 3)
-        dl = q[self.il].reshape(-1, 3, 3)
-        n = np.einsum("jb,jbi->ji", self.axis, dl)[:, None, :]
-        return dp, dl, n
-
     def matrix(self, q: Array) -> Array:
-        dp, dl, n = self._get(q)
-        nj = len(self.ip)
-        out = np.empty((nj, 19))
-        out[:, 0] = 1.0
-        out[:, 1:10] = (self.k * _cross(n, dp)).reshape(nj, 9)
-        out[:, 10:19] = (-self.k * _cross(n, dl)).reshape(nj, 9)
-        return out
+        """Rows (J, 19) over (s, the pin's directors, the link's directors)."""
+        return _kernels.rolling_matrix(q, self._op, self._ol, self.k, self.axis)
 
     def derivative(self, q: Array, dq: Array) -> Array:
-        dp, dl, n = self._get(q)
-        ep = dq[self.ip].reshape(-1, 3, 3)
-        el = dq[self.il].reshape(-1, 3, 3)
-        nj = len(self.ip)
-        w = (_cross(dp, ep) - _cross(dl, el)).sum(axis=1)  # ∂/∂n
-        out = np.zeros((nj, 19))
-        out[:, 1:10] = (self.k * _cross(ep, n)).reshape(nj, 9)
-        out[:, 10:19] = ((-self.k * _cross(el, n)).reshape(nj, 9)
-                         + (self.k[:, 0] * np.einsum("jb,ji->jbi", self.axis, w).reshape(nj, 9)))
-        return out
+        """∂(A(q)·dq)/∂q (J, 19) over the same columns."""
+        return _kernels.rolling_derivative(q, dq, self._op, self._ol, self.k, self.axis)
 
 
 CurveSliding.set_class = CurveSlidingSet
 ArcLength.set_class = ArcLengthSet
 Rolling.set_class = RollingSet
 
-
-def _cross(a: Array, b: Array) -> Array:
-    """Cross product with broadcasting over leading axes (cheaper than np.cross for 3-vectors)."""
-    a, b = np.broadcast_arrays(a, b)
-    out = np.empty(a.shape)
-    out[..., 0] = a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1]
-    out[..., 1] = a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2]
-    out[..., 2] = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
-    return out

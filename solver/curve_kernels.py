@@ -7,8 +7,18 @@ vectorized NumPy every one of these was some tens of einsum/stack calls on (J, 3
 (J = 4 on the hub model), so the cost was interpreter and small-array overhead, not
 arithmetic: about 40 % of a hub case's time. Here each is one compiled loop over the joints
 (numba, like :mod:`solver.bsplines`) that reads the directors straight from q and writes the
-values in the set's sparse pattern order; the curve evaluation itself stays with
-:class:`solver.curves.NurbsCurve` (one compiled call per parameter set).
+values in the set's sparse pattern order. The kernels evaluate the curve themselves (its
+B-spline, ``NurbsCurve.spline``, through :func:`solver.bsplines.nurbs_eval`) and build a planar
+curve's frame (:func:`_planar_frame`); only a space curve's Frenet frame comes from
+``NurbsCurve.frame``.
+
+The nonholonomic relations that go with the joint are here too, one compiled call per set
+each: the arc length ṡ − |p*'(η)| η̇ = 0 (Eq. 25: :func:`arc_length_matrix`,
+:func:`arc_length_derivative`) and rolling ṡ + σ r (ω_pin − ω_link)·n = 0 (Eq. 5:
+:func:`rolling_matrix`, :func:`rolling_derivative`). In NumPy these were small-array calls
+(a curve evaluation, norms, broadcast cross products) several times per Newton iteration;
+compiling them, the planar frame of the joint's Hessian and the rotational springs
+(:mod:`solver.rotation_kernels`) took a free hub case from 6.8–8.0 s to 3.3–4.7 s of CPU.
 
 Layout of one joint (column indices within the joint's column block, as
 ``CurveSlidingSet._structure``): 0:3 x_k, 3:12 the directors d_1^k, d_2^k, d_3^k, 12:15 x_ℓ,
@@ -29,6 +39,8 @@ from __future__ import annotations
 
 import numpy as np
 from numpy.typing import NDArray
+
+from solver.bsplines import nurbs_eval
 
 try:
     from numba import njit
@@ -86,27 +98,81 @@ def _cross_into(a: Array, b: Array, out: Array, col: int) -> None:
 
 
 @njit(cache=True)
-def curve_state(d: Array, frame: Array, dframe: Array, rot: Array, offset: Array,
-                normal: Array, planar: bool, c: Array, ra: IArray,
+def _curve(knots: Array, hom: Array, degree: int, rational: bool, eta: Array,
+           order: int) -> Array:
+    """p, p', …, p⁽ᵒʳᵈᵉʳ⁾ (order + 1, J, 3) of a curve (``NurbsCurve.spline``) at the
+    parameters η clipped to [0, 1], as ``NurbsCurve.derivatives`` clips them: one compiled
+    evaluation (:func:`solver.bsplines.nurbs_eval`), no trip through the interpreter."""
+    x = np.empty(eta.shape[0])
+    for j in range(eta.shape[0]):
+        x[j] = min(max(eta[j], 0.0), 1.0)
+    return nurbs_eval(knots, hom, degree, x, order, rational)
+
+
+@njit(cache=True)
+def _planar_frame(d: Array, j: int, normal: Array, r: Array, dr: Array) -> None:
+    """The planar frame R (columns t, n, b) and dR/dη at point j of d = [p, p', p'', …]
+    (the convention of ``NurbsCurve.frame`` for a planar curve, to roundoff):
+        t = p'/|p'|,  b = plane normal,  n = b × t,
+        t' = (p'' − t (t·p''))/|p'|  (the derivative of p'/|p'|),  n' = b × t',  b' = 0.
+    The speed |p'| must not vanish (a cusp of the parametrization has no tangent here)."""
+    sp = np.sqrt(d[1, j, 0] * d[1, j, 0] + d[1, j, 1] * d[1, j, 1] + d[1, j, 2] * d[1, j, 2])
+    t = np.empty(3)
+    tp = np.empty(3)
+    for i in range(3):
+        t[i] = d[1, j, i] / sp
+    tdp = t[0] * d[2, j, 0] + t[1] * d[2, j, 1] + t[2] * d[2, j, 2]
+    for i in range(3):
+        tp[i] = (d[2, j, i] - t[i] * tdp) / sp
+        r[i, 0] = t[i]
+        r[i, 2] = normal[i]
+        dr[i, 0] = tp[i]
+        dr[i, 2] = 0.0
+    _cross_into(normal, t, r, 1)
+    _cross_into(normal, tp, dr, 1)
+
+
+@njit(cache=True)
+def planar_dframe(knots: Array, hom: Array, degree: int, rational: bool, eta: Array,
+                  normal: Array) -> Array:
+    """dR/dη (J, 3, 3) of a planar curve (``NurbsCurve.spline``, unit plane ``normal``) at η
+    clipped to [0, 1]: what ``NurbsCurve.frame(eta)[1]`` gives, in one compiled call (the
+    Hessian's central difference of dR/dη evaluates it at η ± h every Newton iteration)."""
+    d = _curve(knots, hom, degree, rational, eta, 2)
+    nj = eta.shape[0]
+    r = np.empty((3, 3))
+    out = np.empty((nj, 3, 3))
+    for j in range(nj):
+        _planar_frame(d, j, normal, r, out[j])
+    return out
+
+
+@njit(cache=True)
+def curve_state(knots: Array, hom: Array, degree: int, rational: bool, eta: Array,
+                frame: Array, dframe: Array, rot: Array, offset: Array, normal: Array,
+                planar: bool, c: Array, ra: IArray,
                 rb: IArray) -> tuple[Array, Array, Array, Array, Array]:
     """The curve at the joints' parameters in body k's frames: p*, p*', p*'' and W, dW/dη.
 
     Parameters
     ----------
-    d : (3, J, 3) p, p', p'' of the curve itself (m per η^k), from ``curve.derivatives``.
+    knots, hom, degree, rational : the curve (``NurbsCurve.spline``), points in m.
+    eta : (J,) the joints' curve parameters (clipped to [0, 1] like ``curve.derivatives``).
     frame, dframe : (J, 3, 3) the curve's frame R and dR/dη (columns t, n, b) from
         ``curve.frame`` for a space curve; ignored (may be empty) if ``planar`` or without
         rotation rows.
     rot, offset : (J, 3, 3), (J, 3) placement of the curve in body k: p* = o + Q p, R* = Q R.
     normal : (3,) plane normal of a planar curve.
-    planar : build R, dR/dη from ``d`` and ``normal`` (the planar convention of
-        :mod:`solver.curves`) instead of ``frame``/``dframe``.
+    planar : build R, dR/dη from the curve's p', p'' and ``normal`` (:func:`_planar_frame`,
+        the planar convention of :mod:`solver.curves`) instead of ``frame``/``dframe``.
     c : (J, 3, 3) Frenet triad at η0 in body ℓ's frame; ra, rb : (r,) the rows' pairs (a, b).
 
     Returns
     -------
-    p, p1, p2 : (J, 3); w, dw : (J, r, 3, 3) the rotation rows' W(η) and dW/dη (Eq. 23).
+    p, p1, p2 : (J, 3) p* (m), p*' (m per η), p*'' (m per η²); w, dw : (J, r, 3, 3) the
+    rotation rows' W(η) and dW/dη (Eq. 23).
     """
+    d = _curve(knots, hom, degree, rational, eta, 2)
     nj, nr = d.shape[1], ra.shape[0]
     p = np.empty((nj, 3))
     p1 = np.empty((nj, 3))
@@ -116,8 +182,6 @@ def curve_state(d: Array, frame: Array, dframe: Array, rot: Array, offset: Array
     r = np.empty((3, 3))
     dr = np.empty((3, 3))
     rk = np.empty((3, 3))
-    t = np.empty(3)
-    tp = np.empty(3)
     for j in range(nj):
         for i in range(3):
             s0 = 0.0
@@ -133,21 +197,7 @@ def curve_state(d: Array, frame: Array, dframe: Array, rot: Array, offset: Array
         if nr == 0:
             continue
         if planar:
-            # the planar frame from the derivatives at hand (solver.curves convention):
-            # t = p'/|p'|, b = plane normal, n = b × t, t' = (p'' − t(t·p''))/|p'|, b' = 0
-            sp = np.sqrt(d[1, j, 0] * d[1, j, 0] + d[1, j, 1] * d[1, j, 1]
-                         + d[1, j, 2] * d[1, j, 2])
-            for i in range(3):
-                t[i] = d[1, j, i] / sp
-            tdp = t[0] * d[2, j, 0] + t[1] * d[2, j, 1] + t[2] * d[2, j, 2]
-            for i in range(3):
-                tp[i] = (d[2, j, i] - t[i] * tdp) / sp
-                r[i, 0] = t[i]
-                r[i, 2] = normal[i]
-                dr[i, 0] = tp[i]
-                dr[i, 2] = 0.0
-            _cross_into(normal, t, r, 1)
-            _cross_into(normal, tp, dr, 1)
+            _planar_frame(d, j, normal, r, dr)
             _rotate(rot[j], r, rk)
             _bilinear(rk, c[j], ra, rb, w[j])
             _rotate(rot[j], dr, rk)
@@ -422,3 +472,134 @@ def constraint_hessian(q: Array, ok: IArray, ol: IArray, lam: Array, p1: Array, 
             r_, c_ = hr[k], hc[k]
             vals[j * nph + k] = h[r_, c_] if r_ == c_ else h[r_, c_] + h[c_, r_]
     return vals
+
+
+# ----------------------------------------------------------------- nonholonomic relations
+@njit(cache=True)
+def arc_length_matrix(knots: Array, hom: Array, degree: int, rational: bool, q: Array,
+                      ie: IArray) -> Array:
+    """Rows A of the arc-length relations ṡ − |p*'(η)| η̇ = 0 (Eq. 25) over (s, η).
+
+    The speed of the placed curve is the curve's own, |p*'| = |Q p'| = |p'| (Q a rotation).
+
+    Parameters
+    ----------
+    knots, hom, degree, rational : the curve (``NurbsCurve.spline``), points in m.
+    q : (n,) coordinates; ie : (J,) index of each relation's η (clipped to [0, 1]).
+
+    Returns
+    -------
+    (J, 2): (1, −|p'(η)|) per relation (dimensionless, m per unit η).
+    """
+    d = _curve(knots, hom, degree, rational, q[ie], 1)
+    out = np.empty((ie.shape[0], 2))
+    for j in range(ie.shape[0]):
+        out[j, 0] = 1.0
+        out[j, 1] = -np.sqrt(d[1, j, 0] * d[1, j, 0] + d[1, j, 1] * d[1, j, 1]
+                             + d[1, j, 2] * d[1, j, 2])
+    return out
+
+
+@njit(cache=True)
+def arc_length_derivative(knots: Array, hom: Array, degree: int, rational: bool, q: Array,
+                          dq: Array, ie: IArray) -> Array:
+    """∂(A(q)·dq)/∂q of the arc-length rows (J, 2) over (s, η): A·dq = ds − |p'(η)| dη
+    depends on η alone, with d|p'|/dη = p'·p''/|p'|, so the η entry is −(p'·p''/|p'|) dη
+    (m per unit η, times dη) and the s entry 0."""
+    d = _curve(knots, hom, degree, rational, q[ie], 2)
+    out = np.zeros((ie.shape[0], 2))
+    for j in range(ie.shape[0]):
+        sp = np.sqrt(d[1, j, 0] * d[1, j, 0] + d[1, j, 1] * d[1, j, 1]
+                     + d[1, j, 2] * d[1, j, 2])
+        dot = d[1, j, 0] * d[2, j, 0] + d[1, j, 1] * d[2, j, 1] + d[1, j, 2] * d[2, j, 2]
+        out[j, 1] = -dot / sp * dq[ie[j]]
+    return out
+
+
+@njit(cache=True)
+def _axis_vector(q: Array, o: int, axis: Array, j: int, out: Array) -> None:
+    """out = Σ_β axis_β d_β: the rolling axis n of joint j in the global frame, from the
+    directors of the link (first director at q[o])."""
+    for i in range(3):
+        out[i] = (axis[j, 0] * q[o + i] + axis[j, 1] * q[o + 3 + i]) + axis[j, 2] * q[o + 6 + i]
+
+
+@njit(cache=True)
+def _cross_at(a: Array, ia: int, b: Array, ib: int, out: Array) -> None:
+    """out = a[ia : ia + 3] × b[ib : ib + 3] (vectors stored in flat arrays)."""
+    out[0] = a[ia + 1] * b[ib + 2] - a[ia + 2] * b[ib + 1]
+    out[1] = a[ia + 2] * b[ib] - a[ia] * b[ib + 2]
+    out[2] = a[ia] * b[ib + 1] - a[ia + 1] * b[ib]
+
+
+@njit(cache=True)
+def rolling_matrix(q: Array, op: IArray, ol: IArray, k: Array, axis: Array) -> Array:
+    """Rows A of the rolling relations ṡ + σ r (ω_pin − ω_link)·n = 0 (Eq. 5).
+
+    With directors, ω·n = ½ Σ_α ḋ_α·(n × d_α), so the row over (s, d_α^pin, d_α^link) is
+        (1,  k n × d_α^pin,  −k n × d_α^link),   k = ½ σ r,
+    n = Σ_β axis_β d_β^link the rolling axis (the curve binormal) carried by the link.
+
+    Parameters
+    ----------
+    q : (n,) coordinates; op, ol : (J,) index of the first director of the pin and the link;
+    k : (J,) ½ σ r (m); axis : (J, 3) rolling axis in the link's frame (unit).
+
+    Returns
+    -------
+    (J, 19): the rows over (s, the pin's 9 director coordinates, the link's 9), in m for the
+    director columns.
+    """
+    nj = op.shape[0]
+    out = np.empty((nj, 19))
+    n = np.empty(3)
+    x = np.empty(3)
+    for j in range(nj):
+        _axis_vector(q, ol[j], axis, j, n)
+        out[j, 0] = 1.0
+        for a in range(3):
+            _cross_at(n, 0, q, op[j] + 3 * a, x)
+            for i in range(3):
+                out[j, 1 + 3 * a + i] = k[j] * x[i]
+            _cross_at(n, 0, q, ol[j] + 3 * a, x)
+            for i in range(3):
+                out[j, 10 + 3 * a + i] = -k[j] * x[i]
+    return out
+
+
+@njit(cache=True)
+def rolling_derivative(q: Array, dq: Array, op: IArray, ol: IArray, k: Array,
+                       axis: Array) -> Array:
+    """∂(A(q)·dq)/∂q of the rolling rows (J, 19), over the columns of :func:`rolling_matrix`.
+
+    With e_α the director components of dq, A·dq = de_s + k Σ_α [n·(d_α^pin × e_α^pin) −
+    n·(d_α^link × e_α^link)] (a triple product), so
+        ∂/∂d_α^pin = k e_α^pin × n,   ∂/∂d_α^link = −k e_α^link × n + k axis_α w,
+    the last term through the rolling axis n = Σ_β axis_β d_β^link, with
+    w = ∂(A·dq)/∂n / k = Σ_α (d_α^pin × e_α^pin − d_α^link × e_α^link).
+    """
+    nj = op.shape[0]
+    out = np.zeros((nj, 19))
+    n = np.empty(3)
+    x = np.empty(3)
+    y = np.empty(3)
+    w = np.empty(3)
+    for j in range(nj):
+        _axis_vector(q, ol[j], axis, j, n)
+        # w = Σ_α (d_α^pin × e_α^pin − d_α^link × e_α^link): ∂(row·v)/∂n along dq
+        for a in range(3):
+            _cross_at(q, op[j] + 3 * a, dq, op[j] + 3 * a, x)
+            _cross_at(q, ol[j] + 3 * a, dq, ol[j] + 3 * a, y)
+            for i in range(3):
+                if a == 0:
+                    w[i] = x[i] - y[i]
+                else:
+                    w[i] += x[i] - y[i]
+        for a in range(3):
+            _cross_at(dq, op[j] + 3 * a, n, 0, x)
+            for i in range(3):
+                out[j, 1 + 3 * a + i] = k[j] * x[i]
+            _cross_at(dq, ol[j] + 3 * a, n, 0, x)
+            for i in range(3):
+                out[j, 10 + 3 * a + i] = -k[j] * x[i] + k[j] * (axis[j, a] * w[i])
+    return out

@@ -403,6 +403,13 @@ class NurbsCurve:
         """Total arc length, length units."""
         return float(self._cum[-1])
 
+    @property
+    def spline(self) -> tuple[FloatArray, FloatArray, int, bool]:
+        """``(knots, coefficients, degree, rational)``: the homogeneous B-spline that
+        :func:`solver.bsplines.nurbs_eval` evaluates, for compiled kernels that evaluate the
+        curve themselves (at parameters clipped to [0, 1], as :meth:`derivatives` does)."""
+        return self.knots, self._hom, self.degree, self._rational
+
     # ---------------------------------------------------------------------------------------
     # evaluation
     # ---------------------------------------------------------------------------------------

@@ -22,6 +22,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from solver import curve_kernels as _kernels
 from solver.bodies import PointMass, RigidBody
 from solver.curve_joints import CurveSliding, CurveSlidingSet
 from solver.curves import NurbsCurve, circle
@@ -194,3 +195,100 @@ def test_hessian_matches_finite_differences(case):
     # measured ≤ 5.7e-13 of the scale outside the pattern (FD noise of zero entries)
     assert np.abs(fd[~pattern]).max(initial=0.0) < 1e-10 * scale
     assert np.abs(h[:, cs.ie]).max() > 0.1  # the η couplings are there (not vacuous)
+
+
+# ------------------------------------------------------------- planar frame, η ± h (Hessian)
+def test_planar_dframe_matches_the_curve_frame():
+    """The Hessian's dR/dη of a planar curve (built in the kernel from p', p'') against
+    ``NurbsCurve.frame`` (η inside, at the ends and beyond them: clipped like the curve)."""
+    curve = _curve("planar")
+    eta = np.array([0.0, 0.13, 0.33, 0.63, 0.97, 1.0, -0.2, 1.3])
+    dr = _kernels.planar_dframe(*curve.spline, eta, curve.plane_normal)
+    expect = curve.frame(eta)[1]
+    # measured ≤ 1.5e-16 of max |dR/dη| ≈ 5.9 (1/|p'| applied as a product there, a
+    # quotient here)
+    assert np.abs(dr - expect).max() < 1e-14 * np.abs(expect).max()
+
+
+# ------------------------------------------------------------- arc length and rolling rows
+@pytest.mark.parametrize("kind", ["planar", "space"])
+def test_arc_length_rows_match_finite_differences(kind):
+    """A = (1, −|p'(η)|) with |p'| from fourth-order central differences of the curve's
+    points, and ∂(A·dq)/∂q from those of A·dq; several relations in one call."""
+    curve = _curve(kind)
+    rng = np.random.default_rng(SEED + 4)
+    n = 12
+    ie = np.array([2, 7, 9, 4], dtype=np.int64)
+    q = rng.standard_normal(n)
+    q[ie] = [0.11, 0.33, 0.63, 0.9]
+    dq = rng.standard_normal(n)
+    a = _kernels.arc_length_matrix(*curve.spline, q, ie)
+    h = 3e-4
+    sp = np.linalg.norm(_fd4(curve.point, q[ie], slice(None), h), axis=1)
+    assert np.all(a[:, 0] == 1.0)
+    # measured ≤ 4.1e-12 of |p'| ≈ 4.7 (FD truncation h⁴|p⁽⁵⁾|: 4.8e-10 with h = 1e-3)
+    assert np.abs(a[:, 1] + sp).max() < 1e-10 * sp.max()
+    d = _kernels.arc_length_derivative(*curve.spline, q, dq, ie)
+
+    def adq(x):
+        return _kernels.arc_length_matrix(*curve.spline, x, ie)[:, 1] * dq[ie]
+
+    fd = np.array([_fd4(adq, q, i, h)[j] for j, i in enumerate(ie)])
+    assert np.all(d[:, 0] == 0.0)
+    # measured ≤ 9.2e-11 of the largest |FD| (2.2 to 2.6; FD truncation, the space curve's
+    # the larger); a wrong sign or factor would be off by O(1)
+    assert np.abs(d[:, 1] - fd).max() < 3e-9 * max(1.0, np.abs(fd).max())
+    # beyond the ends: the curve at η clipped to [0, 1], as NurbsCurve.derivatives
+    q[ie[:2]] = (-0.3, 1.4)
+    a = _kernels.arc_length_matrix(*curve.spline, q, ie)
+    # measured 0 (the same evaluation)
+    assert np.abs(a[:2, 1] + curve.speed(np.array([0.0, 1.0]))).max() < 1e-14
+
+
+def _rolling_rows(q, op, ol, k, axis):
+    """The rolling rows written out with np.cross: (1, k n × d_α^pin, −k n × d_α^link)."""
+    rows = []
+    for j in range(len(op)):
+        dp = q[op[j] : op[j] + 9].reshape(3, 3)
+        dl = q[ol[j] : ol[j] + 9].reshape(3, 3)
+        n = axis[j] @ dl
+        rows.append(np.concatenate([[1.0], (k[j] * np.cross(n, dp)).ravel(),
+                                    (-k[j] * np.cross(n, dl)).ravel()]))
+    return np.array(rows)
+
+
+def test_rolling_rows_match_cross_products_and_finite_differences():
+    """Three rolling rows (sides ±1, radii, axes in the link's frame) on random, non-unit
+    directors: A against np.cross; ∂(A·dq)/∂q against central differences of A·dq (A·dq is
+    bilinear in q, so the differences are exact to roundoff)."""
+    rng = np.random.default_rng(SEED + 5)
+    n = 60
+    op = np.array([3, 23, 41], dtype=np.int64)
+    ol = np.array([12, 32, 50], dtype=np.int64)
+    k = np.array([0.5 * 0.02, -0.5 * 0.035, 0.5 * 0.01])
+    axis = rng.standard_normal((3, 3))
+    axis /= np.linalg.norm(axis, axis=1)[:, None]
+    q = rng.standard_normal(n)
+    dq = rng.standard_normal(n)
+    a = _kernels.rolling_matrix(q, op, ol, k, axis)
+    expect = _rolling_rows(q, op, ol, k, axis)
+    # measured 0 (entries up to 0.04: the same products)
+    assert np.abs(a - expect).max() < 1e-15
+    cols = np.concatenate([np.zeros((3, 1), dtype=np.int64), op[:, None] + np.arange(9),
+                           ol[:, None] + np.arange(9)], axis=1)
+
+    def adq(x):
+        return np.einsum("jc,jc->j", _rolling_rows(x, op, ol, k, axis)[:, 1:], dq[cols[:, 1:]])
+
+    d = _kernels.rolling_derivative(q, dq, op, ol, k, axis)
+    h = 1e-3
+    for j in range(3):
+        for c in range(1, 19):
+            e = np.zeros(n)
+            e[cols[j, c]] = h
+            fd = (adq(q + e) - adq(q - e))[j] / (2 * h)
+            # measured ≤ 8.1e-15 (entries up to 0.11): the differences' roundoff eps|A·dq|/h;
+            # a missing term (the link block's k axis_α w) would be off by O(1e-2)
+            assert abs(d[j, c] - fd) < 1e-12, (j, c, d[j, c], fd)
+    assert np.all(d[:, 0] == 0.0)
+    assert np.abs(d[:, 10:]).max() > 1e-3  # the link block's n-derivative is there
