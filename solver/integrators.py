@@ -263,7 +263,7 @@ class Integrator:
             a = s.nonholonomic_values(w.q)
             blocks["AT"] = a
             blocks["A"] = a + w.a_weight * s.nonholonomic_derivative(w.q, w.w)
-        return s.kkt(blocks)
+        return s.kkt(blocks, shared=True)  # only factored, never kept
 
     def _culprit(self, res) -> str:
         """Which element owns the largest residual of a failed Newton iteration."""
