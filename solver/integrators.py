@@ -413,6 +413,10 @@ class GeneralizedAlpha(Integrator):
         self.qdd = (self._qdd0 if self._qdd0 is not None
                     else initial_accelerations(system, self.q, self.v, self.t))
         self.acc = self.qdd.copy()
+        # constants of every step: ∂v_f/∂Δq, with ẋ_f = k1 Δx + k0 for first-order states
+        self._k1 = (1 - self.am1) / ((1 - self.af1) * self.gamma1 * self.h)
+        self._dv_dx = np.full(system.n, self.gamma / (self.beta * self.h))
+        self._dv_dx[self.first] = self._k1
 
     def _begin(self) -> None:
         s, h = self.sys, self.h
@@ -426,12 +430,8 @@ class GeneralizedAlpha(Integrator):
         f = self.first
         g1 = self.gamma1
         # ẋ_f = k1 Δx + k0: from w_f = (Δx − h(1−γ)w_i)/(γh) and the α-filter of the rates
-        self._k1 = (1 - self.am1) / ((1 - self.af1) * g1 * h)
         self._k0 = ((1 - self.am1) * (-(1 - g1) * ai[f] / g1) + self.am1 * ai[f]
                     - self.af1 * qddi[f]) / (1 - self.af1)
-        dv = np.full(s.n, g / (b * h))
-        dv[f] = self._k1
-        self._dv_dx = dv
 
     def _start(self) -> Array:
         h = self.h
