@@ -96,3 +96,17 @@ def test_singular_matrix_is_reported():
     assert lin.lu is None
     with pytest.raises(ValueError, match="not square"):
         RefactorLU().factor(sp.csc_matrix(np.ones((2, 3))))
+
+
+def test_earlier_pivot_order_is_tried_before_superlu():
+    """A pattern whose values alternate between two states that need different pivots (a
+    turning model) is refactored with the kept order of each: SuperLU runs twice, not at
+    every switch."""
+    a = sp.csc_matrix(np.array([[2.0, 1.0], [1.0, 1.0]]))
+    b = sp.csc_matrix((np.array([1e-6, 1.0, 1.0, 1.0]), a.indices, a.indptr), shape=(2, 2))
+    lu = RefactorLU()
+    for k in range(6):
+        m = a if k % 2 == 0 else b
+        lu.factor(m)
+        np.testing.assert_allclose(m @ lu.solve(np.array([1.0, 2.0])), [1.0, 2.0], rtol=1e-12)
+    assert (lu.fresh, lu.refactored) == (2, 4)
