@@ -4,7 +4,11 @@ Failure is a value: :func:`newton` returns a :class:`NewtonResult` with ``conver
 ``iterations`` and a message; non-finite residuals, a singular matrix or a contraction rate ≥ 1
 with a fresh Jacobian mean divergence (scipy ``radau.py::solve_collocation_system`` does the
 same). Reusing the LU factors of an earlier Jacobian (modified Newton) costs a few more, much
-cheaper, iterations; the factors are refreshed as soon as the contraction slows down.
+cheaper, iterations; the factors are refreshed as soon as the contraction slows down. A
+refreshed factorization keeps an earlier pivot order of the same pattern when it still passes
+the pivot test (:mod:`solver.sparse_lu`), which makes it about ten times cheaper than SuperLU's
+on these matrices. Above roundoff-level tolerances the iteration stops on the error its
+contraction rate predicts, rate/(1 − rate)·|Δx|, instead of confirming with one more update.
 """
 
 from __future__ import annotations
