@@ -20,6 +20,10 @@ module:
 * the stiffness is Bᵀ C B + Σ_k S_k h_k with S = C (e − e0): no further derivative to code;
 * the section kinetic energy ½ ∫ρ |ẋ + ξ2 ḋ2 + ξ3 ḋ3|² dA gives a *constant* mass matrix.
 
+The strain-energy arithmetic (strains, stresses, force, material and geometric stiffness) is
+compiled in :mod:`solver.beam_kernels`, loops over elements and points that use the sparse
+structure of h_k (each strain a sum of terms c u_i·u_j' of the interpolated x, d_i).
+
 Reference strains e0 are computed from the interpolated reference configuration itself, so a
 curved or pre-twisted beam carries exactly zero force there. Joints and loads attach to a
 beam's :class:`BeamNode` exactly as to a rigid body (its centre = the node, its frame = the
@@ -42,6 +46,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from solver import beam_kernels as kernels
+from solver.beam_kernels import STRAIN_TERMS
 from solver.bodies import orthonormality_rows
 from solver.element import Element, ElementSet
 from solver.quadratic import QuadraticSet
@@ -50,14 +56,6 @@ from solver.state import SECOND, StateBlock
 
 Array = NDArray[np.float64]
 NODE_XI = np.array([-1.0, -1.0 / 3.0, 1.0 / 3.0, 1.0])
-# (strain k, director i, director j, coefficient c): e_k gets c·(u_i · u_j') where u_0 = x and
-# u_1..3 = d1..3.  Γ_i = d_i·x';  K_1 = ½(d3·d2' − d2·d3') etc.
-STRAIN_TERMS = (
-    (0, 1, 0, 1.0), (1, 2, 0, 1.0), (2, 3, 0, 1.0),
-    (3, 3, 2, 0.5), (3, 2, 3, -0.5),
-    (4, 1, 3, 0.5), (4, 3, 1, -0.5),
-    (5, 2, 1, 0.5), (5, 1, 2, -0.5),
-)
 LOAD_NAMES = ("N", "V2", "V3", "T", "M2", "M3")
 LOAD_UNITS = ("N", "N", "N", "N m", "N m", "N m")
 
@@ -78,7 +76,11 @@ def lagrange(xi: ArrayLike) -> tuple[Array, Array]:
 
 def strain_matrices(n: Array, dn_ds: Array) -> Array:
     """The constant matrices h_k (…, 6, 16, 16) with e_k = ½ Σ h_k[α, β] Q_α·Q_β over the
-    element's nodal 3-vectors Q_{4a+u} (node a, u = x, d1, d2, d3)."""
+    element's nodal 3-vectors Q_{4a+u} (node a, u = x, d1, d2, d3).
+
+    The dense form of the strains, for analysis and as the tests' independent reference: the
+    solver evaluates strains, forces and stiffness with the compiled kernels of
+    :mod:`solver.beam_kernels`, which use the terms' structure instead of these matrices."""
     p = n[..., :, None] * dn_ds[..., None, :]  # P_ab = N_a N_b'
     h = np.zeros((*n.shape[:-1], 6, 4, 4, 4, 4))  # k, a, u, b, w
     for k, i, j, c in STRAIN_TERMS:
@@ -289,13 +291,15 @@ class Beam(Element):
 
 
 class BeamSet(ElementSet):
-    """Strain energy of all beams of a model, vectorized over their quadrature points.
+    """Strain energy of all beams of a model, by compiled loops over their quadrature points.
 
-    Evaluation runs element by element over a padded stack of each element's points (``width``
-    slots, the most points of any element; unused slots have zero h, C and weight), so that
-    every sum over an element's points is inside one batched product: the strains use the
-    element Gram matrix Q Qᵀ, the force is (Σ_g Σ_k w S_k h_k) Q, the geometric stiffness that
-    16 × 16 sum times I3 and the material stiffness Bᵀ (wC B) over the stacked points.
+    The quadrature data sit in a padded stack per element (``width`` slots, the most points of
+    any element; unused slots have zero shape functions, C and weight and are skipped), so the
+    strains, stresses and weights of a point keep one slot. The arithmetic is in
+    :mod:`solver.beam_kernels`: per point the interpolated x, d_i and their s-derivatives, the
+    strains and the strain gradient B from the one strain-term table; force ∫ Bᵀ S ds,
+    material stiffness ∫ Bᵀ C B ds (three nonzero strains per row of B), geometric stiffness
+    (Σ_k w S_k h_k) ⊗ I3.
     """
 
     def __init__(self, elements, system) -> None:
@@ -315,25 +319,27 @@ class BeamSet(ElementSet):
             n_el += b.n_elements
         self.idx = np.concatenate(idx)  # (E, 48) global coordinates of each element
         el = np.concatenate(el)  # element of each quadrature point
-        h = strain_matrices(np.concatenate(n), np.concatenate(dn))  # (G, 6, 16, 16)
         wds, stiff = np.concatenate(wds), np.concatenate(c)
         # quadrature points are generated element by element: slot of each point in its
         # element's padded stack
         starts = np.searchsorted(el, np.arange(n_el))
-        width = int(np.diff(np.append(starts, len(el))).max())
+        self._count = np.diff(np.append(starts, len(el))).astype(np.int64)
+        width = int(self._count.max())
         slot = el * width + np.arange(len(el)) - starts[el]
 
         def padded(a: Array) -> Array:
             out = np.zeros((n_el * width, *a.shape[1:]))
             out[slot] = a
-            return out
+            return out.reshape(n_el, width, *a.shape[1:])
 
-        self._hp = padded(h.reshape(-1, 6, 256)).reshape(n_el, 6 * width, 256)
-        self._wp = padded(wds)[:, None]
-        self._Cp = padded(stiff)
-        self._wCp = padded(wds[:, None, None] * stiff)
-        self._e0p = np.zeros((n_el * width, 6))
-        self._e0p = self._strains(system.q0_raw)[1]  # reference strains: zero force there
+        self._n = padded(np.concatenate(n))  # (E, W, 4) shape functions
+        self._dn = padded(np.concatenate(dn))  # (E, W, 4) their s-derivatives (1/m)
+        self._w = padded(wds)  # (E, W) ds weights (m)
+        self._C = padded(stiff)  # (E, W, 6, 6) section stiffness
+        self._wC = padded(wds[:, None, None] * stiff)
+        self._e0 = np.zeros((n_el, width, 6))
+        # reference strains: zero force there
+        self._e0 = self._strains(system.q0_raw)[1].reshape(n_el, width, 6)
         self.grad_idx = self.idx.ravel()
         self.stiff_rows = np.repeat(self.idx, 48, axis=1).ravel()
         self.stiff_cols = np.tile(self.idx, (1, 48)).ravel()
@@ -346,30 +352,32 @@ class BeamSet(ElementSet):
         """Element vectors Q (E, 16, 3) and strains e − e0 in the padded point slots
         (E · width, 6)."""
         qe = self._element_vectors(q)
-        gram = (qe @ np.swapaxes(qe, 1, 2)).reshape(-1, 256, 1)
-        e = 0.5 * (self._hp @ gram).reshape(-1, 6)
-        return qe, e - self._e0p
+        e = kernels.strains(qe, self._n, self._dn, self._count, self._e0)
+        return qe, e.reshape(-1, 6)
 
     def _stress(self, e: Array) -> Array:
-        """Stress resultants C (e − e0) in the padded slots."""
-        return (self._Cp @ e[:, :, None])[:, :, 0]
+        """Stress resultants C (e − e0) in the padded slots (E · width, 6)."""
+        s = kernels.stresses(self._C, e.reshape(self._e0.shape), self._count)
+        return s.reshape(-1, 6)
 
     def _stress_matrices(self, stress: Array) -> Array:
         """Σ over each element's points of Σ_k w S_k h_k: (E, 16, 16)."""
-        ws = (stress * self._wp).reshape(len(self._hp), 1, -1)
-        return (ws @ self._hp).reshape(-1, 16, 16)
+        return kernels.stress_matrices(stress.reshape(self._e0.shape), self._n, self._dn,
+                                       self._w, self._count)
 
     def _force(self, qe: Array, stress: Array) -> Array:
         """∫ Bᵀ S ds per element, flattened on ``grad_idx``: B_k = h_k Q."""
-        return (self._stress_matrices(stress) @ qe).ravel()
+        return kernels.force(qe, stress.reshape(self._e0.shape), self._n, self._dn, self._w,
+                             self._count).ravel()
 
     def potential(self, q):
         _, e = self._strains(q)
-        return 0.5 * float(np.einsum("gk,gk->", e, (self._wCp @ e[:, :, None])[:, :, 0]))
+        return float(kernels.energy(e.reshape(self._e0.shape), self._wC, self._count))
 
     def gradient(self, q):
-        qe, e = self._strains(q)
-        return self._force(qe, self._stress(e))
+        # _force(qe, _stress(e)) of _strains(q), fused into one compiled pass
+        return kernels.internal_force(self._element_vectors(q), self._n, self._dn, self._w,
+                                      self._C, self._count, self._e0).ravel()
 
     def discrete_gradient(self, qi, qf):
         # e is quadratic in q: e_f − e_i = B(q_m)(q_f − q_i) exactly, so the midpoint B
@@ -380,24 +388,15 @@ class BeamSet(ElementSet):
         return self._force(qm, self._stress(0.5 * (ei + ef)))
 
     def _material(self, qe: Array, qe_right: Array | None = None) -> Array:
-        """Material stiffness Σ_g Bᵀ wC B per element (E, 48, 48), with B = h Q in the padded
-        slots (E · width, 6, 48): positive semidefinite. With ``qe_right``, Σ_g B(Q)ᵀ wC
-        B(Q_right)."""
-        n_el = len(qe)
-
-        def strain_matrices(x: Array) -> Array:
-            return (self._hp.reshape(n_el, -1, 16, 16) @ x[:, None]).reshape(-1, 6, 48)
-
-        b = strain_matrices(qe)
-        cb = self._wCp @ (b if qe_right is None else strain_matrices(qe_right))
-        return np.swapaxes(b.reshape(n_el, -1, 48), 1, 2) @ cb.reshape(n_el, -1, 48)
+        """Material stiffness Σ_g Bᵀ wC B per element (E, 48, 48): positive semidefinite.
+        With ``qe_right``, Σ_g B(Q)ᵀ wC B(Q_right)."""
+        same = qe_right is None
+        return kernels.material(qe, qe if same else qe_right, same, self._n, self._dn,
+                                self._wC, self._count)
 
     def _with_geometric(self, k: Array, stress: Array) -> Array:
         """k (E, 48, 48) plus the geometric stiffness of ``stress``: (Σ_k w S_k h_k) ⊗ I3."""
-        hs = self._stress_matrices(stress)
-        kv = k.reshape(len(k), 16, 3, 16, 3)
-        for c in range(3):
-            kv[:, :, c, :, c] += hs
+        kernels.add_geometric(k, self._stress_matrices(stress))
         return k.ravel()
 
     def material_stiffness(self, q):
@@ -451,9 +450,12 @@ class SectionProbe:
                 "w": np.zeros(3 * len(s))}
         n, dn, _ = beam._geometry(quad)
         self.beam = beam
-        self.h = strain_matrices(n, dn)  # (3 len(s), 6, 16, 16)
+        # one point per slot for the compiled strain kernel (the same as BeamSet's)
+        self.n, self.dn = n[:, None, :], dn[:, None, :]
+        self.count = np.ones(len(n), dtype=np.int64)
         self.local = 36 * el[:, None] + np.arange(48)
-        self.C = beam.sections.at(quad["s"])["stiffness"]
+        self.C = beam.sections.at(quad["s"])["stiffness"][:, None]
+        self.e0 = np.zeros((len(n), 1, 6))
         self.e0 = self._strains(beam.reference_coordinates().ravel()[self.local])
         # quadratic Lagrange interpolation through the Gauss points
         xi = -1.0 + 2.0 * (s - s0) / (s1 - s0)
@@ -465,13 +467,13 @@ class SectionProbe:
         self.lag = lag
 
     def _strains(self, qloc: Array) -> Array:
-        v = qloc.reshape(-1, 16, 3)
-        return 0.5 * np.einsum("gkab,gab->gk", self.h, v @ np.swapaxes(v, 1, 2))
+        """Strains minus the reference ones (3 len(s), 1, 6) from the element vectors."""
+        return kernels.strains(qloc.reshape(-1, 16, 3), self.n, self.dn, self.count, self.e0)
 
     def __call__(self, system, q: Array) -> Array:
         """(len(s), 6) resultants at the configuration q of ``system``."""
-        e = self._strains(q[system.offset[self.beam] + self.local]) - self.e0
-        stress = (self.C @ e[:, :, None])[:, :, 0].reshape(len(self.lag), 3, 6)
+        e = self._strains(q[system.offset[self.beam] + self.local])
+        stress = kernels.stresses(self.C, e, self.count).reshape(len(self.lag), 3, 6)
         return np.einsum("ga,gak->gk", self.lag, stress)
 
 
