@@ -417,6 +417,7 @@ class GeneralizedAlpha(Integrator):
         self._k1 = (1 - self.am1) / ((1 - self.af1) * self.gamma1 * self.h)
         self._dv_dx = np.full(system.n, self.gamma / (self.beta * self.h))
         self._dv_dx[self.first] = self._k1
+        self._has_first = bool(len(self.first))
 
     def _begin(self) -> None:
         s, h = self.sys, self.h
@@ -430,13 +431,16 @@ class GeneralizedAlpha(Integrator):
         f = self.first
         g1 = self.gamma1
         # ẋ_f = k1 Δx + k0: from w_f = (Δx − h(1−γ)w_i)/(γh) and the α-filter of the rates
-        self._k0 = ((1 - self.am1) * (-(1 - g1) * ai[f] / g1) + self.am1 * ai[f]
-                    - self.af1 * qddi[f]) / (1 - self.af1)
+        # (first-order states only; a purely mechanical model skips the empty index work)
+        if self._has_first:
+            self._k0 = ((1 - self.am1) * (-(1 - g1) * ai[f] / g1) + self.am1 * ai[f]
+                        - self.af1 * qddi[f]) / (1 - self.af1)
 
     def _start(self) -> Array:
         h = self.h
         dq = h * self.v + 0.5 * h * h * self.acc
-        dq[self.first] = h * self.v[self.first]
+        if self._has_first:
+            dq[self.first] = h * self.v[self.first]
         return np.concatenate([dq, self._sc * self.lam, self._sc * self.nu])
 
     def _unpack(self, x):
@@ -445,8 +449,9 @@ class GeneralizedAlpha(Integrator):
         dq = x[:n]
         anew = (dq - self._base) / (self.beta * h * h)
         vf = self._vconst + h * self.gamma * anew
-        f = self.first
-        vf[f] = self._k1 * dq[f] + self._k0
+        if self._has_first:
+            f = self.first
+            vf[f] = self._k1 * dq[f] + self._k0
         return dq, self.q + dq, vf, anew, x[n : n + mh], x[n + mh :]
 
     def _residual(self, x):
@@ -488,9 +493,10 @@ class GeneralizedAlpha(Integrator):
         dq, qf, vf, anew, mu, nu = self._unpack(x)
         ai, qddi = self.acc, self.qdd
         qdd = ((1 - am) * anew + am * ai - af * qddi) / (1 - af)
-        f = self.first
-        anew[f] = (dq[f] - h * (1 - self.gamma1) * ai[f]) / (self.gamma1 * h)  # w_f
-        qdd[f] = vf[f]
+        if self._has_first:
+            f = self.first
+            anew[f] = (dq[f] - h * (1 - self.gamma1) * ai[f]) / (self.gamma1 * h)  # w_f
+            qdd[f] = vf[f]
         lam, nuv = mu / self._sc, nu / self._sc
         if not self.conservative:  # no loads, dampers or drivers: no work to book
             qm, vm = self.q + 0.5 * dq, 0.5 * (self.v + vf)
