@@ -18,11 +18,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-try:
-    from numba import njit
-except ImportError as exc:  # a hard dependency: say how to get it
-    raise ImportError("bifilar's compiled kernels need numba: pip install 'numba>=0.59' "
-                      "(a wheel for every supported platform is on PyPI)") from exc
+from solver.jit import njit
 
 Array = NDArray[np.float64]
 

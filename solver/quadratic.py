@@ -16,13 +16,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from solver.element import ElementSet
+from solver.jit import njit
 from solver.timefunctions import TimeFunction, constant
-
-try:
-    from numba import njit
-except ImportError as exc:  # a hard dependency: say how to get it
-    raise ImportError("bifilar's compiled kernels need numba: pip install 'numba>=0.59' "
-                      "(a wheel for every supported platform is on PyPI)") from exc
 
 
 @njit(cache=True)

@@ -33,11 +33,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
 
-try:
-    from numba import njit
-except ImportError as exc:  # a hard dependency: say how to get it
-    raise ImportError("bifilar's compiled kernels need numba: pip install 'numba>=0.59' "
-                      "(a wheel for every supported platform is on PyPI)") from exc
+from solver.jit import njit
 
 Array = NDArray[np.float64]
 IntArray = NDArray[np.int64]

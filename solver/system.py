@@ -18,14 +18,9 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
 
-try:
-    from numba import njit
-except ImportError as exc:  # a hard dependency: say how to get it
-    raise ImportError("bifilar's compiled kernels need numba: pip install 'numba>=0.59' "
-                      "(a wheel for every supported platform is on PyPI)") from exc
-
 from solver.bodies import PointMass, PrescribedBody, RigidBody, Scalar
 from solver.element import ElementSet, group_elements
+from solver.jit import njit
 from solver.quadratic import QuadraticSet, VecExpr
 from solver.state import Layout
 
