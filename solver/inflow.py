@@ -427,10 +427,17 @@ class DynamicInflow(Element):
         -------
         ndarray, shape ``(*xi.shape, n_states)`` (dimensionless)
         """
-        phi = self.shape(xi, eta)
+        return self.shape(xi, eta) * self.load_factors
+
+    @property
+    def load_factors(self) -> Array:
+        """Per state, the factor of the load weights on the shapes, W = Φ * factors state by
+        state (:meth:`load_weights`): 1/π for Pitt–Peters, ½τ's 1/(4π) (r = 0) or 1/(2π)
+        (r ≥ 1) for Peters–He. A caller that has Φ already forms W without a second shape
+        call."""
         if self.model == PITT_PETERS:
-            return phi / math.pi
-        return phi * self._half_tau
+            return np.full(3, 1.0 / math.pi)
+        return self._half_tau.copy()
 
     def induced_velocity(self, points: ArrayLike, states: ArrayLike) -> np.ndarray:
         """Induced velocity −λ Ω R ẑ (m/s, model axes) at points (n, 3) for given states."""

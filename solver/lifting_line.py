@@ -52,10 +52,14 @@ and ξ sin F on d3 (exact for directors); a moment m e_s acts as director forces
 With ``inflow``, each section adds its share of the rotor's load to the inflow states:
 W(ξ, η) (F·ẑ) ds / (ρ Ω² R⁴) (:meth:`~solver.inflow.DynamicInflow.load_weights`).
 
-Jacobians: the airloads of all sections are one vectorized kernel, written so that it also
-runs on complex numbers; its derivatives by every local input (12 coordinates, 12 rates, 12
-accelerations, the section's states and the inflow states) come from complex steps, all at
-once in one batched call — exact to roundoff, from the one formula.
+Jacobians: the airloads of a section are one compiled kernel
+(:func:`solver.aero_kernels.section_loads`, numba) that runs on real numbers (the forces and
+the ``airloads`` details, from the same call) and on complex numbers; its derivatives by every
+local input (12 coordinates, 12 rates, 12 accelerations, the section's states and the inflow
+states) come from complex steps, one input at a time in one compiled loop
+(:func:`~solver.aero_kernels.local_jacobian`) — exact to roundoff, from the one formula. The
+inflow shapes and load weights, which depend on the section's position only, are evaluated by
+the inflow model in NumPy at the real positions and at the three stepped ones, and passed in.
 """
 
 from __future__ import annotations
@@ -68,6 +72,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from solver import aero_kernels
 from solver.air import FlightCondition
 from solver.airfoil import DEFAULT_STATES, peters_matrices
 from solver.beams import Beam, lagrange
@@ -237,10 +242,6 @@ def _quadrature(ends: Array, cuts: Array, s0: float, s1: float, points: int) -> 
     return {"element": np.concatenate(el), "s": np.concatenate(s), "ds": np.concatenate(w)}
 
 
-def _dot(a, b):
-    return np.einsum("...i,...i->...", a, b)
-
-
 class LiftingLineSet(ElementSet):
     """All lifting lines of a model (sections of every line evaluated together)."""
 
@@ -276,7 +277,14 @@ class LiftingLineSet(ElementSet):
                 sidx.append(o + np.arange(e.n_sections * self.n).reshape(-1, self.n))
         self.idx48 = np.concatenate(idx)  # (K, 48)
         self.S = np.concatenate(smat)  # (K, 12, 48)
-        self._St = np.ascontiguousarray(np.swapaxes(self.S, 1, 2))  # (K, 48, 12)
+        # S by its nonzeros (count, row, column, value per section; 48 of 576 on a beam)
+        nnz = np.count_nonzero(self.S, axis=(1, 2))
+        nz = np.zeros((3, len(nnz), max(int(nnz.max()), 1)))
+        for j, sj in enumerate(self.S):
+            r, c = np.nonzero(sj)
+            nz[:, j, : len(r)] = r, c, sj[r, c]
+        self._nz = (nnz.astype(np.int64), nz[0].astype(np.int64), nz[1].astype(np.int64),
+                    np.ascontiguousarray(nz[2]))
         p = {k: np.concatenate(v) for k, v in props.items()}
         self.line_of = np.concatenate([np.full(e.n_sections, j) for j, e in enumerate(elements)])
         k = len(self.idx48)
@@ -304,12 +312,18 @@ class LiftingLineSet(ElementSet):
             self.inflow_idx = system.offset[infl] + np.arange(self.n_i)
             self.omega_r = infl.omega * infl.radius
             self.load_scale = 1.0 / (self.rho * infl.omega**2 * infl.radius**4)
+            self.load_factors = infl.load_factors
             ref = max(float(np.sqrt(self.vinf @ self.vinf)), self.omega_r, 1.0)
         else:
             self.n_i = 0
             self.inflow_idx = np.zeros(0, dtype=np.int64)
+            self.omega_r = self.load_scale = 0.0
             ref = max(float(np.sqrt(self.vinf @ self.vinf)), 1.0)
         self.u_floor2 = (FLOOR_FRACTION * ref) ** 2
+        self.vinf = np.ascontiguousarray(self.vinf, dtype=float)
+        # the sections' constants in the compiled kernel's layout (aero_kernels.N_PROPS)
+        self.props = np.ascontiguousarray(np.column_stack(
+            [self.b, self.cos_t, self.sin_t, self.xq, self.a_lift, self.cd0, self.ds]))
         # global indices of each section's outputs/inputs: 48 support coordinates, its own
         # states, the inflow states
         self.loc_idx = np.concatenate([self.idx48, self.state_idx,
@@ -340,137 +354,94 @@ class LiftingLineSet(ElementSet):
     # ------------------------------------------------------------------ the kernel
     def _inputs(self, q: Array, v: Array, a: Array):
         # the section's coordinates, rates and accelerations from its support's nodes
-        xs = self.S @ np.stack([q[self.idx48], v[self.idx48], a[self.idx48]], axis=2)
-        x, xd, xa = xs[:, :, 0], xs[:, :, 1], xs[:, :, 2]
+        x, xd, xa = np.empty((self.K, 12)), np.empty((self.K, 12)), np.empty((self.K, 12))
+        aero_kernels.section_inputs(q, v, a, self.idx48, *self._nz, x, xd, xa)
         mu = q[self.state_idx]
-        al = np.broadcast_to(q[self.inflow_idx], (self.K, self.n_i))
+        al = np.ascontiguousarray(np.broadcast_to(q[self.inflow_idx], (self.K, self.n_i)))
         return x, xd, xa, mu, al
 
-    def _kernel(self, x, xd, xa, mu, al, sec, details: bool = False):
-        """Airloads of sections ``sec`` (indices into this set's sections) for their local
-        coordinates x, rates xd, accelerations xa (…, 12), wake states mu (…, N) and inflow
-        states al (…, n_i). Real or complex. Returns (g (…, 12) generalized force per unit
-        span on (x, d1, d2, d3), wake-state rates (…, N), inflow forcing (…, n_i))."""
-        rho = self.rho
-        b, ct, st = self.b[sec], self.cos_t[sec], self.sin_t[sec]
-        xq = self.xq[sec]
-        pos, d1, d2, d3 = x[:, 0:3], x[:, 3:6], x[:, 6:9], x[:, 9:12]
-        vel, dd2, dd3 = xd[:, 0:3], xd[:, 6:9], xd[:, 9:12]
-        acc, ad2, ad3 = xa[:, 0:3], xa[:, 6:9], xa[:, 9:12]
-        ec = ct[:, None] * d2 + st[:, None] * d3
-        en = -st[:, None] * d2 + ct[:, None] * d3
-        dec = ct[:, None] * dd2 + st[:, None] * dd3
-        den = -st[:, None] * dd2 + ct[:, None] * dd3
-        aec = ct[:, None] * ad2 + st[:, None] * ad3
-        vair = np.broadcast_to(self.vinf, pos.shape).astype(pos.dtype)
-        if self.n_i:
-            xi, eta = self.inflow.disk_coordinates(pos)
-            lam = _dot(self.inflow.shape(xi, eta), al)
-            vair = vair - (lam * self.omega_r)[:, None] * np.array([0.0, 0.0, 1.0])
-        xm, x34 = xq - 0.5 * b, xq - b
-        w_mid = vair - vel - xm[:, None] * dec
-        w_34 = vair - vel - x34[:, None] * dec
-        w_qc = vair - vel - xq[:, None] * dec
-        u = -_dot(w_mid, ec)
-        w0, w34 = _dot(w_mid, en), _dot(w_34, en)
-        w1 = b * _dot(dec, en)
-        if self.n:
-            lam0 = _dot(mu, self.pb) + self.kappa * w34
-            ueff = np.sqrt(u * u + self.u_floor2)
-            rates = -(ueff / b)[:, None] * (mu + w34[:, None] * self.ainv_c)
-        else:
-            lam0 = 0.0 * w34
-            rates = np.zeros((len(b), 0), dtype=w34.dtype)
-        wc = w34 - lam0
-        gam = self.a_lift[sec] * b * wc
-        f_qc = (rho * gam)[:, None] * (u[:, None] * en + wc[:, None] * ec)
-        wp = w_qc - (_dot(w_qc, d1) / _dot(d1, d1))[:, None] * d1
-        f_qc = f_qc + (rho * b * self.cd0[sec] * np.sqrt(_dot(wp, wp)))[:, None] * wp
-        w0dot = -_dot(acc + xm[:, None] * aec, en) + _dot(w_mid, den)
-        w1dot = b * (_dot(aec, en) + _dot(dec, den))
-        pib2 = math.pi * rho * b * b
-        l_nc = pib2 * w0dot
-        m_nc = -pib2 * (0.5 * u * w1 + 0.125 * b * w1dot)
-        f_mid = l_nc[:, None] * en
-        g = np.zeros(x.shape, dtype=np.result_type(x, xd, xa, mu, al))
-        g[:, 0:3] = f_qc + f_mid
-        for col, c in ((6, ct), (9, st)):
-            g[:, col : col + 3] = (xq * c)[:, None] * f_qc + (xm * c)[:, None] * f_mid
-        # pure moment m_nc e_s: director forces ½ (m e_s) × d_i
-        mvec = m_nc[:, None] * d1
-        for i, d in enumerate((d1, d2, d3)):
-            g[:, 3 + 3 * i : 6 + 3 * i] += 0.5 * np.cross(mvec, d)
-        ftot = f_qc + f_mid
-        if self.n_i:
-            forcing = (self.inflow.load_weights(xi, eta)
-                       * (ftot[:, 2] * self.ds[sec] * self.load_scale)[:, None])
-        else:
-            forcing = np.zeros((len(b), 0), dtype=g.dtype)
-        if details:
-            return {"force": ftot, "circulatory": f_qc, "u": u, "w0": w0, "w34": w34,
-                    "lam0": lam0, "lift": rho * gam * u, "apparent_lift": l_nc,
-                    "apparent_moment": m_nc, "position": pos, "air": vair}
-        return g, rates, forcing
+    def _inflow_terms(self, pos):
+        """Inflow shapes Φ (λ = Φ·α) and load weights W (K, n_i) at section positions pos
+        (K, 3), real or complex; empty without an inflow."""
+        if not self.n_i:
+            return (np.zeros((len(pos), 0), dtype=pos.dtype),) * 2
+        phi = np.ascontiguousarray(self.inflow.shape(*self.inflow.disk_coordinates(pos)))
+        return phi, phi * self.load_factors  # = inflow.load_weights, one shape evaluation
+
+    def _constants(self):
+        return (self.props, self.rho, self.vinf, self.omega_r, self.load_scale, self.u_floor2,
+                self.kappa, self.pb, self.ainv_c)
+
+    def _kernel(self, x, xd, xa, mu, al):
+        """Airloads of every section (:func:`solver.aero_kernels.section_loads`) for their local
+        coordinates x, rates xd, accelerations xa (K, 12), wake states mu (K, N) and inflow
+        states al (K, n_i). Returns g (K, 12) the generalized force per unit span on (x, d1,
+        d2, d3), the wake-state rates (K, N), the inflow forcing (K, n_i) and the details
+        (K, 19; :data:`solver.aero_kernels.DETAIL_COLUMNS`)."""
+        k = self.K
+        phi, wts = self._inflow_terms(x[:, 0:3])
+        g, det = np.empty((k, 12)), np.empty((k, aero_kernels.DETAILS))
+        rates, forcing = np.empty((k, self.n)), np.empty((k, self.n_i))
+        aero_kernels.airloads(x, xd, xa, mu, al, phi, wts, *self._constants(), g, rates,
+                              forcing, det)
+        return g, rates, forcing, det
 
     # ------------------------------------------------------------------ terms
     def force(self, q, v, t, a):
-        g, rates, forcing = self._kernel(*self._inputs(q, v, a), np.arange(self.K))
-        fs = ((g * self.ds[:, None])[:, None, :] @ self.S)[:, 0]  # Sᵀ g ds per section
-        return np.concatenate([fs, rates, forcing], axis=1).ravel()
+        g, rates, forcing, _ = self._kernel(*self._inputs(q, v, a))
+        out = np.empty((self.K, 48 + self.n + self.n_i))
+        aero_kernels.support_forces(g, self.ds, *self._nz, out)  # Sᵀ g ds per section
+        out[:, 48 : 48 + self.n], out[:, 48 + self.n :] = rates, forcing
+        return out.ravel()
 
     def _local_jacobian(self, q, v, a):
-        """∂(g, rates, forcing)/∂(x, μ, α | ẋ | ẍ) of every section by complex steps, all
-        perturbations in one batched kernel call. Cached for the current (q, v, a)."""
+        """∂(g, rates, forcing)/∂(x, μ, α | ẋ | ẍ) of every section by complex steps of the
+        compiled section kernel, (K, 12 + n + ni, 36 + n + ni). Cached for the current
+        (q, v, a)."""
         key = (q.tobytes(), v.tobytes(), a.tobytes())
         if self._cache is not None and self._cache[0] == key:
             return self._cache[1]
         x, xd, xa, mu, al = self._inputs(q, v, a)
         k, n, ni = self.K, self.n, self.n_i
-        nin = 36 + n + ni
-        ins = [np.repeat(z[None].astype(complex), nin, axis=0) for z in (x, xd, xa, mu, al)]
-        # column j perturbs input j of every section: order x(12), μ(n), α(ni), ẋ(12), ẍ(12)
-        blocks = [(0, 12), (3, n), (4, ni), (1, 12), (2, 12)]
-        j = 0
-        for which, size in blocks:
-            for c in range(size):
-                ins[which][j, :, c] += 1j * COMPLEX_STEP
-                j += 1
-        flat = [z.reshape(nin * k, -1) for z in ins]
-        sec = np.tile(np.arange(k), nin)
-        g, rates, forcing = self._kernel(*flat, sec)
-        out = np.concatenate([g, rates, forcing], axis=1).imag / COMPLEX_STEP
-        jac = out.reshape(nin, k, -1).transpose(1, 2, 0)  # (K, out, in)
+        phi, wts = self._inflow_terms(x[:, 0:3])
+        # Φ and W at the positions stepped by i h along x, y, z: all the Jacobian needs of them
+        pos = np.repeat(x[None, :, 0:3].astype(complex), 3, axis=0)  # (3, K, 3)
+        for c in range(3):
+            pos[c, :, c] += 1j * COMPLEX_STEP
+        pp, wp = (z.reshape(3, k, ni) for z in self._inflow_terms(pos.reshape(3 * k, 3)))
+        jac = np.empty((k, 12 + n + ni, 36 + n + ni))  # (K, out, in)
+        aero_kernels.local_jacobian(x, xd, xa, mu, al, phi, wts, pp, wp, *self._constants(),
+                                    COMPLEX_STEP, jac)
         self._cache = (key, jac)
         return jac
 
-    def _expand_out(self, jac_rows: Array) -> Array:
-        """Map local output rows (12 + n + ni) to the global ones (48 + n + ni): the support
-        part through Sᵀ ds."""
-        # batched matmul, not einsum: 5-8x faster on these (K, 12, 48) stacks
-        top = self._St @ (jac_rows[:, :12] * self.ds[:, None, None])
-        return np.concatenate([top, jac_rows[:, 12:]], axis=1)
+    def _expand(self, jac: Array, c0: int, nraw: int) -> Array:
+        """Global blocks of the local Jacobian's columns c0…c0+11 (+ ``nraw`` state columns):
+        rows and the 12 columns mapped through Sᵀ ds and S
+        (:func:`solver.aero_kernels.expand_jacobian`); (K, 48 + n + ni, 48 + nraw)."""
+        out = np.empty((self.K, 48 + self.n + self.n_i, 48 + nraw))
+        aero_kernels.expand_jacobian(jac, c0, nraw, self.ds, *self._nz, out)
+        return out
 
     def force_jacobians(self, q, v, t, a):
         jac = self._local_jacobian(q, v, a)
         n, ni = self.n, self.n_i
-        jq = self._expand_out(jac[:, :, : 12 + n + ni])  # (K, m, 12 + n + ni)
-        jqs = jq[:, :, :12] @ self.S
-        dq = np.concatenate([jqs, jq[:, :, 12:]], axis=2)
-        jv = self._expand_out(jac[:, :, 12 + n + ni : 24 + n + ni])
-        dv = jv @ self.S
+        dq = self._expand(jac, 0, n + ni)
+        dv = self._expand(jac, 12 + n + ni, 0)
         return dq.ravel(), dv.ravel()
 
     def acceleration_jacobian(self, q, v, t, a):
         jac = self._local_jacobian(q, v, a)
-        ja = self._expand_out(jac[:, :, 24 + self.n + self.n_i :])
-        return (ja @ self.S).ravel()
+        return self._expand(jac, 24 + self.n + self.n_i, 0).ravel()
 
     # ------------------------------------------------------------------ outputs
     def airloads(self, q: Array, v: Array, a: Array) -> dict[str, Array]:
         """Per section: ``force`` (N/m, global, total), ``circulatory`` (N/m), ``lift``
         (ρΓu, N/m), ``u``, ``w0``, ``w34``, ``lam0`` (m/s), ``apparent_lift`` (N/m),
         ``apparent_moment`` (N·m/m), ``position`` (m), ``air`` (m/s), ``s``, ``ds`` (m)."""
-        out = self._kernel(*self._inputs(q, v, a), np.arange(self.K), details=True)
+        *_, det = self._kernel(*self._inputs(q, v, a))
+        out = {name: det[:, i] if w == 1 else det[:, i : i + w]
+               for name, (i, w) in aero_kernels.DETAIL_COLUMNS.items()}
         out.update(s=self.s, ds=self.ds, line=self.line_of)
         return out
 

@@ -1,0 +1,302 @@
+"""Compiled airloads of the lifting-line sections (:mod:`solver.lifting_line`).
+
+:class:`~solver.lifting_line.LiftingLineSet` evaluates, per section, the Peters finite-state
+airfoil in the section's frame (circulatory lift at the quarter chord, profile drag, apparent
+mass) and its share of the rotor inflow forcing; the formulas and their derivation are in the
+docstring of :mod:`solver.lifting_line`. The force Jacobians are complex steps of the same
+formula by each of the section's 36 + N + n_i local inputs. As a vectorized NumPy kernel this
+was some eighty array operations on arrays of a few dozen sections per call (and one call on a
+36 + N + n_i times larger complex batch for the Jacobians): interpreter overhead, not
+arithmetic. Here :func:`section_loads` is the one implementation of the formula, compiled by
+numba for float64 (the forces and the ``details`` of
+:meth:`~solver.lifting_line.LiftingLineSet.airloads`, from the same call) and for complex128
+(:func:`local_jacobian`'s complex steps), so both come from one source.
+
+The rotor inflow enters through its shape functions Φ (λ = Φ·α at the section) and the load
+weights W (the section's share of the forcing), evaluated by
+:class:`~solver.inflow.DynamicInflow` in NumPy at the sections' disk coordinates and passed in:
+they depend on the section's position only, so the complex-step Jacobian needs them at the
+real positions and at the three positions stepped by i h along x, y and z (two NumPy calls
+per Jacobian instead of a shape evaluation per perturbed input).
+
+The support maps S (12 × 48 per section: x = S q, loads Sᵀ g ds) are mostly zeros (48 of 576
+on a beam: one shape function per node and component); :func:`section_inputs`,
+:func:`support_forces` and :func:`expand_jacobian` use their nonzeros only.
+
+Layout. Section k's inputs are x (12: position, d1, d2, d3, m), their rates xd (m/s) and
+accelerations xa (m/s²), the wake states mu (N, m/s) and the inflow states al (n_i, −).
+``props[k]`` holds (b semichord m, cos(θ − α0), sin(θ − α0), ξ_qc m, lift slope × lifting
+1/rad, c_d0, ds m). Outputs: g (12) the generalized force per unit span on (x, d1, d2, d3)
+(N/m), the wake-state rates (N, m/s²), the inflow forcing (n_i, −), and the details (``DETAILS``
+columns, see :data:`DETAIL_COLUMNS`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numpy.typing import NDArray
+
+from solver.jit import njit
+
+Array = NDArray[np.float64]
+
+# columns of the details row of a section: name → (first column, width)
+DETAIL_COLUMNS = {"force": (0, 3), "circulatory": (3, 3), "u": (6, 1), "w0": (7, 1),
+                  "w34": (8, 1), "lam0": (9, 1), "lift": (10, 1), "apparent_lift": (11, 1),
+                  "apparent_moment": (12, 1), "position": (13, 3), "air": (16, 3)}
+DETAILS = 19
+N_PROPS = 7  # b, cos, sin, ξ_qc, a, c_d0, ds
+_WORK = 11  # rows of 3-vectors in the work buffer
+
+
+@njit(cache=True)
+def section_loads(x, xd, xa, mu, al, phi, wts, props, rho, vinf, omega_r, load_scale,
+                  u_floor2, kappa, pb, ainv_c, wk, g, rates, forcing, det):
+    """Airloads of one section (real or complex: every operation is analytic).
+
+    Parameters
+    ----------
+    x, xd, xa
+        (12,) coordinates (position m, directors d1, d2, d3), rates, accelerations.
+    mu
+        (N,) wake states μ = λ − A⁻¹c w34 (m/s).
+    al
+        (n_i,) inflow states (on ΩR).
+    phi, wts
+        (n_i,) inflow shapes Φ (λ = Φ·al) and load weights W at the section's position.
+    props
+        (7,) the section's constants: b (m), cos(θ − α0), sin(θ − α0), ξ_qc (m), lift slope
+        times the lifting flag (1/rad), c_d0, quadrature weight ds (m).
+    rho, vinf
+        Air density (kg/m³) and free stream (3,) (m/s).
+    omega_r, load_scale
+        ΩR (m/s) and 1/(ρΩ²R⁴) of the inflow (unused without inflow states).
+    u_floor2
+        Floor u_f² (m²/s²) of the wake decay speed √(u² + u_f²).
+    kappa, pb, ainv_c
+        κ = ½bᵀA⁻¹c, ½b (N,) and A⁻¹c (N,) of Peters' model.
+    wk
+        (11, 3) work buffer of the inputs' dtype.
+    g, rates, forcing, det
+        Outputs (12,), (N,), (n_i,), (19,) (N/m, m/s², −, see ``DETAIL_COLUMNS``).
+    """
+    b, ct, st, xq, a_lift, cd0, ds = (props[0], props[1], props[2], props[3], props[4],
+                                      props[5], props[6])
+    n, ni = mu.shape[0], al.shape[0]
+    # induced inflow λ = Φ·α at the section: −λΩR ẑ adds to the free stream
+    lam = 0.0 * x[0]
+    for i in range(ni):
+        lam += phi[i] * al[i]
+    xm, x34 = xq - 0.5 * b, xq - b  # mid-chord and three-quarter chord
+    ec, en, dec, den, aec = wk[0], wk[1], wk[2], wk[3], wk[4]
+    vair, w_mid, w_34, w_qc, f_qc, f_mid = wk[5], wk[6], wk[7], wk[8], wk[9], wk[10]
+    for i in range(3):
+        # chordwise (towards the leading edge) and normal unit vectors of the zero-lift line,
+        # their rates and the acceleration of e_c
+        ec[i] = ct * x[6 + i] + st * x[9 + i]
+        en[i] = -st * x[6 + i] + ct * x[9 + i]
+        dec[i] = ct * xd[6 + i] + st * xd[9 + i]
+        den[i] = -st * xd[6 + i] + ct * xd[9 + i]
+        aec[i] = ct * xa[6 + i] + st * xa[9 + i]
+        vair[i] = vinf[i]
+    vair[2] = vair[2] - lam * omega_r
+    u = 0.0 * x[0]
+    w0 = 0.0 * x[0]
+    w34 = 0.0 * x[0]
+    w1 = 0.0 * x[0]
+    for i in range(3):
+        # air velocity relative to the chord points P(ξ) = x + ξ e_c
+        w_mid[i] = vair[i] - xd[i] - xm * dec[i]
+        w_34[i] = vair[i] - xd[i] - x34 * dec[i]
+        w_qc[i] = vair[i] - xd[i] - xq * dec[i]
+        u -= w_mid[i] * ec[i]
+        w0 += w_mid[i] * en[i]
+        w34 += w_34[i] * en[i]
+        w1 += dec[i] * en[i]
+    w1 = b * w1
+    if n:
+        lam0 = kappa * w34
+        for j in range(n):
+            lam0 += mu[j] * pb[j]
+        ueff = np.sqrt(u * u + u_floor2)
+        for j in range(n):
+            rates[j] = -(ueff / b) * (mu[j] + w34 * ainv_c[j])
+    else:
+        lam0 = 0.0 * w34
+    # Kutta–Joukowski at the quarter chord: F = ρΓ (u e_n + (w34 − λ0) e_c)
+    wc = w34 - lam0
+    gam = a_lift * b * wc
+    # profile drag ½ρ c c_d0 |W⊥| W⊥, W⊥ the part of W(ξ_qc) normal to the span (d1)
+    wd1 = 0.0 * x[0]
+    d11 = 0.0 * x[0]
+    for i in range(3):
+        wd1 += w_qc[i] * x[3 + i]
+        d11 += x[3 + i] * x[3 + i]
+    r = wd1 / d11
+    wpp = 0.0 * x[0]
+    for i in range(3):
+        w_qc[i] = w_qc[i] - r * x[3 + i]  # now W⊥
+        wpp += w_qc[i] * w_qc[i]
+    drag = rho * b * cd0 * np.sqrt(wpp)
+    # apparent mass: rates of w0 and w1 along the motion (the inflow's rate left out)
+    w0dot = 0.0 * x[0]
+    w1dot = 0.0 * x[0]
+    for i in range(3):
+        f_qc[i] = (rho * gam) * (u * en[i] + wc * ec[i]) + drag * w_qc[i]
+        w0dot += -(xa[i] + xm * aec[i]) * en[i] + w_mid[i] * den[i]
+        w1dot += aec[i] * en[i] + dec[i] * den[i]
+    w1dot = b * w1dot
+    pib2 = math.pi * rho * b * b
+    l_nc = pib2 * w0dot
+    m_nc = -pib2 * (0.5 * u * w1 + 0.125 * b * w1dot)
+    for i in range(3):
+        f_mid[i] = l_nc * en[i]
+    # a force F at P(ξ) works on x and, through ξ e_c = ξ (cos d2 + sin d3), on d2 and d3
+    for i in range(3):
+        g[i] = f_qc[i] + f_mid[i]
+        g[3 + i] = 0.0
+        g[6 + i] = (xq * ct) * f_qc[i] + (xm * ct) * f_mid[i]
+        g[9 + i] = (xq * st) * f_qc[i] + (xm * st) * f_mid[i]
+    # the pure moment m_nc e_s (e_s = d1) as director forces ½ (m e_s) × d_i
+    m0, m1, m2 = m_nc * x[3], m_nc * x[4], m_nc * x[5]
+    for d in range(3):
+        o = 3 + 3 * d
+        g[o] += 0.5 * (m1 * x[o + 2] - m2 * x[o + 1])
+        g[o + 1] += 0.5 * (m2 * x[o] - m0 * x[o + 2])
+        g[o + 2] += 0.5 * (m0 * x[o + 1] - m1 * x[o])
+    # the section's share of the rotor load on the inflow states: W (F·ẑ) ds / (ρΩ²R⁴)
+    fz = g[2] * ds * load_scale
+    for i in range(ni):
+        forcing[i] = wts[i] * fz
+    for i in range(3):
+        det[i] = g[i]
+        det[3 + i] = f_qc[i]
+        det[13 + i] = x[i]
+        det[16 + i] = vair[i]
+    det[6], det[7], det[8], det[9] = u, w0, w34, lam0
+    det[10], det[11], det[12] = rho * gam * u, l_nc, m_nc
+
+
+@njit(cache=True)
+def airloads(x, xd, xa, mu, al, phi, wts, props, rho, vinf, omega_r, load_scale, u_floor2,
+             kappa, pb, ainv_c, g, rates, forcing, det):
+    """:func:`section_loads` of every section k (real): inputs (K, ·), outputs g (K, 12),
+    rates (K, N), forcing (K, n_i), det (K, 19)."""
+    wk = np.empty((_WORK, 3))
+    for k in range(x.shape[0]):
+        section_loads(x[k], xd[k], xa[k], mu[k], al[k], phi[k], wts[k], props[k], rho, vinf,
+                      omega_r, load_scale, u_floor2, kappa, pb, ainv_c, wk, g[k], rates[k],
+                      forcing[k], det[k])
+
+
+@njit(cache=True)
+def local_jacobian(x, xd, xa, mu, al, phi, wts, phi_p, wts_p, props, rho, vinf, omega_r,
+                   load_scale, u_floor2, kappa, pb, ainv_c, h, jac):
+    """∂(g, rates, forcing)/∂(x, μ, α, ẋ, ẍ) of every section by complex steps i h of
+    :func:`section_loads`, one input at a time.
+
+    ``phi_p``, ``wts_p`` (3, K, n_i, complex) are Φ and W at the positions perturbed by i h
+    along x, y, z (the only inputs they depend on). ``jac`` (K, 12 + N + n_i, 36 + N + n_i)
+    receives the derivatives, columns in the order x (12), μ (N), α (n_i), ẋ (12), ẍ (12).
+    """
+    n, ni = mu.shape[1], al.shape[1]
+    m = 12 + n + ni
+    wk = np.empty((_WORK, 3), np.complex128)
+    cx = np.empty(12, np.complex128)
+    cxd = np.empty(12, np.complex128)
+    cxa = np.empty(12, np.complex128)
+    cmu = np.empty(n, np.complex128)
+    cal = np.empty(ni, np.complex128)
+    cph = np.empty(ni, np.complex128)
+    cwt = np.empty(ni, np.complex128)
+    out = np.empty(m, np.complex128)
+    det = np.empty(DETAILS, np.complex128)
+    step = 1j * h
+    for k in range(x.shape[0]):
+        for i in range(12):
+            cx[i], cxd[i], cxa[i] = x[k, i], xd[k, i], xa[k, i]
+        for i in range(n):
+            cmu[i] = mu[k, i]
+        for i in range(ni):
+            cal[i], cph[i], cwt[i] = al[k, i], phi[k, i], wts[k, i]
+        col = 0
+        for block in range(5):
+            size = 12 if block in (0, 3, 4) else (n if block == 1 else ni)
+            arr = cx if block == 0 else (cmu if block == 1 else
+                                          (cal if block == 2 else (cxd if block == 3 else cxa)))
+            for c in range(size):
+                base = arr[c]
+                arr[c] = base + step
+                if block == 0 and c < 3:  # a position step moves the inflow shapes
+                    ph, wt = phi_p[c, k], wts_p[c, k]
+                else:
+                    ph, wt = cph, cwt
+                section_loads(cx, cxd, cxa, cmu, cal, ph, wt, props[k], rho, vinf, omega_r,
+                              load_scale, u_floor2, kappa, pb, ainv_c, wk, out[:12],
+                              out[12 : 12 + n], out[12 + n :], det)
+                arr[c] = base
+                for i in range(m):
+                    jac[k, i, col] = out[i].imag / h
+                col += 1
+
+
+@njit(cache=True)
+def section_inputs(q, v, a, idx48, nnz, nz_r, nz_c, nz_s, x, xd, xa):
+    """The sections' coordinates x, rates xd and accelerations xa (K, 12) from the support's
+    48 global coordinates ``idx48`` (K, 48): x = S q with the map S (12 × 48: the beam's shape
+    functions or a body's rigid offset) given by its ``nnz[k]`` nonzeros S[r, c] = s per
+    section (``nz_r``, ``nz_c``, ``nz_s``, (K, L))."""
+    for k in range(idx48.shape[0]):
+        for r in range(12):
+            x[k, r] = xd[k, r] = xa[k, r] = 0.0
+        for e in range(nnz[k]):
+            r, j, s = nz_r[k, e], idx48[k, nz_c[k, e]], nz_s[k, e]
+            x[k, r] += s * q[j]
+            xd[k, r] += s * v[j]
+            xa[k, r] += s * a[j]
+
+
+@njit(cache=True)
+def support_forces(g, ds, nnz, nz_r, nz_c, nz_s, out):
+    """Consistent loads on the support's 48 coordinates, out[k, :48] = Sᵀ g ds (N), S as in
+    :func:`section_inputs`."""
+    for k in range(g.shape[0]):
+        for c in range(48):
+            out[k, c] = 0.0
+        for e in range(nnz[k]):
+            out[k, nz_c[k, e]] += nz_s[k, e] * (g[k, nz_r[k, e]] * ds[k])
+
+
+@njit(cache=True)
+def expand_jacobian(jac, c0, nraw, ds, nnz, nz_r, nz_c, nz_s, out):
+    """Global blocks of the local Jacobian ``jac`` (K, 12 + N + n_i, ·): its columns c0…c0+11
+    (by the section's 12 coordinates, rates or accelerations) and the ``nraw`` after them (by
+    the section's own states), rows and columns mapped to the support's coordinates,
+
+        out[k] = [[Sᵀ ds J_xx S, Sᵀ ds J_xs],
+                  [J_sx S,       J_ss     ]],
+
+    out (K, 48 + N + n_i, 48 + nraw); S as in :func:`section_inputs`."""
+    m = jac.shape[1]
+    ncol = 12 + nraw
+    rows = np.empty((48 + m - 12, ncol))
+    for k in range(jac.shape[0]):
+        # rows: the 12 force components to the 48 support coordinates through Sᵀ ds
+        rows[:48, :] = 0.0
+        for e in range(nnz[k]):
+            r, c, s = nz_r[k, e], nz_c[k, e], nz_s[k, e] * ds[k]
+            for j in range(ncol):
+                rows[c, j] += s * jac[k, r, c0 + j]
+        for i in range(m - 12):
+            for j in range(ncol):
+                rows[48 + i, j] = jac[k, 12 + i, c0 + j]
+        # columns: by the 12 section inputs to by the 48 support coordinates through S
+        for i in range(48 + m - 12):
+            for c in range(48):
+                out[k, i, c] = 0.0
+            for e in range(nnz[k]):
+                out[k, i, nz_c[k, e]] += rows[i, nz_r[k, e]] * nz_s[k, e]
+            for j in range(nraw):
+                out[k, i, 48 + j] = rows[i, 12 + j]
