@@ -13,8 +13,10 @@ numba for float64 (the forces and the ``details`` of
 (:func:`local_jacobian`'s complex steps), so both come from one source.
 
 The rotor inflow enters through its shape functions Φ (λ = Φ·α at the section) and the load
-weights W (the section's share of the forcing), evaluated by
-:class:`~solver.inflow.DynamicInflow` in NumPy at the sections' disk coordinates and passed in:
+weights W = Φ * factors (the section's share of the forcing), evaluated by
+:meth:`~solver.inflow.DynamicInflow.shape` at the sections' disk coordinates and passed in
+(for Peters–He that method runs :func:`peters_he_shapes`, compiled here as well, for real and
+complex points; it stays the inflow model's one definition of Φ):
 they depend on the section's position only, so the complex-step Jacobian needs them at the
 real positions and at the three positions stepped by i h along x, y and z (two NumPy calls
 per Jacobian instead of a shape evaluation per perturbed input).
@@ -300,3 +302,37 @@ def expand_jacobian(jac, c0, nraw, ds, nnz, nz_r, nz_c, nz_s, out):
                 out[k, i, nz_c[k, e]] += rows[i, nz_r[k, e]] * nz_s[k, e]
             for j in range(nraw):
                 out[k, i, 48 + j] = rows[i, 12 + j]
+
+
+@njit(cache=True)
+def peters_he_shapes(xi, eta, sine, harmonic, coef, ncoef, cr, sr, out):
+    """Peters–He inflow shapes Φ_i = φ_j^r(r̄) (r̄^r cos rψ or r̄^r sin rψ) at disk points
+    (real or complex: polynomials in ξ, η; :meth:`solver.inflow.DynamicInflow.shape`).
+
+    Parameters
+    ----------
+    xi, eta
+        (P,) disk coordinates ξ = r̄ cos ψ, η = r̄ sin ψ.
+    sine, harmonic
+        (n,) per state: 1 for a sine state (β), 0 for a cosine one (α); its harmonic r.
+    coef, ncoef
+        (n, L) coefficients c_k of φ_j^r = r̄^r Σ_k c_k r̄^{2k} (padded) and their counts (n,).
+    cr, sr
+        (M + 1,) work arrays of the points' dtype.
+    out
+        (P, n) the shapes (dimensionless).
+    """
+    nh = cr.shape[0]
+    for p in range(xi.shape[0]):
+        x, e = xi[p], eta[p]
+        # r̄^r cos rψ and r̄^r sin rψ: real and imaginary parts of (ξ + iη)^r, by recursion
+        cr[0], sr[0] = 1.0 + 0.0 * x, 0.0 * x
+        for r in range(1, nh):
+            cr[r] = cr[r - 1] * x - sr[r - 1] * e
+            sr[r] = sr[r - 1] * x + cr[r - 1] * e
+        rho2 = x * x + e * e
+        for i in range(sine.shape[0]):
+            poly = coef[i, ncoef[i] - 1] + 0.0 * x  # Horner in r̄²
+            for c in range(ncoef[i] - 2, -1, -1):
+                poly = poly * rho2 + coef[i, c]
+            out[p, i] = poly * (sr[harmonic[i]] if sine[i] else cr[harmonic[i]])

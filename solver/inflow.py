@@ -76,6 +76,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import brentq
 
+from solver import aero_kernels
 from solver.air import FlightCondition
 from solver.element import EMPTY_F, Element, ElementSet
 from solver.state import FIRST, StateBlock
@@ -278,6 +279,13 @@ class DynamicInflow(Element):
             self._mom = np.zeros(len(self._states))
             self._mom[0] = math.sqrt(3.0)  # λ_m = √3 α_1^0 (φ_1^0 = √3)
             self._coef = [peters_he_shape_coefficients(r, j) for (_, r, j) in self._states]
+            ncoef = np.array([len(c) for c in self._coef], dtype=np.int64)
+            coef = np.zeros((len(ncoef), int(ncoef.max())))
+            for i, c in enumerate(self._coef):
+                coef[i, : len(c)] = c
+            self._shape_tables = (np.array([k == "s" for k, _, _ in self._states], dtype=np.int64),
+                                  np.array([r for _, r, _ in self._states], dtype=np.int64),
+                                  coef, ncoef)
             # ½τ weights: 1/(2π) for the axisymmetric states, 1/π for the harmonics
             self._half_tau = np.array([0.25 / math.pi if r == 0 else 0.5 / math.pi
                                        for (_, r, _) in self._states])
@@ -395,19 +403,14 @@ class DynamicInflow(Element):
             out[..., 1] = eta  # r̄ sin ψ
             out[..., 2] = xi  # r̄ cos ψ
             return out
-        # r̄^r cos rψ and r̄^r sin rψ: real and imaginary parts of (ξ + iη)^r, by recursion
-        cr = [np.ones(xi.shape, dtype=dtype)]
-        sr = [np.zeros(xi.shape, dtype=dtype)]
-        for _ in range(self.harmonics):
-            c, s = cr[-1], sr[-1]
-            cr.append(c * xi - s * eta)
-            sr.append(s * xi + c * eta)
-        rho2 = xi * xi + eta * eta
-        for i, ((kind, r, _), coef) in enumerate(zip(self._states, self._coef, strict=True)):
-            poly = np.full(xi.shape, coef[-1], dtype=dtype)  # Horner in r̄²
-            for c in coef[-2::-1]:
-                poly = poly * rho2 + c
-            out[..., i] = poly * (cr[r] if kind == "c" else sr[r])
+        # compiled (the lifting lines call this at every force evaluation): Horner in r̄² times
+        # r̄^r cos rψ or r̄^r sin rψ, the parts of (ξ + iη)^r by recursion
+        sine, harmonic, coef, ncoef = self._shape_tables
+        flat = out.reshape(-1, self.n_states)
+        work = np.empty((2, self.harmonics + 1), dtype=dtype)
+        aero_kernels.peters_he_shapes(np.ascontiguousarray(xi, dtype=dtype).ravel(),
+                                      np.ascontiguousarray(eta, dtype=dtype).ravel(), sine,
+                                      harmonic, coef, ncoef, work[0], work[1], flat)
         return out
 
     def load_weights(self, xi: ArrayLike, eta: ArrayLike) -> np.ndarray:
