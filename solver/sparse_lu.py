@@ -179,16 +179,24 @@ _PATTERNS_KEPT = 16
 _ORDERS_KEPT = 4
 
 
-def _fresh_analysis(a: sp.csc_matrix) -> _Analysis:
-    """Pivots by SuperLU's partial pivoting, in the column order that fills L and U least of
-    COLAMD and minimum degree on AᵀA + A (both tried from ``ORDERINGS_FROM`` unknowns up: on
-    the rotor's 2424 × 2424 Newton matrix 317 000 and 235 000 entries in L + U)."""
+def _fresh_analysis(a: sp.csc_matrix, spec: str | None = None) -> _Analysis:
+    """Pivots by SuperLU's partial pivoting, in the column order ``spec`` or, if None, the one
+    that fills L and U least of COLAMD and minimum degree on AᵀA + A (both tried from
+    ``ORDERINGS_FROM`` unknowns up: on the rotor's 2424 × 2424 Newton matrix 317 000 and
+    235 000 entries in L + U)."""
+    if spec is not None:
+        specs: tuple[str, ...] = (spec,)
+    elif a.shape[0] >= ORDERINGS_FROM:
+        specs = ("COLAMD", "MMD_AT_PLUS_A")
+    else:
+        specs = ("COLAMD",)
     best = None
-    for spec in ("COLAMD", "MMD_AT_PLUS_A") if a.shape[0] >= ORDERINGS_FROM else ("COLAMD",):
+    for spec in specs:
         with warnings.catch_warnings():
             warnings.simplefilter("error", spla.MatrixRankWarning)
             lu = spla.splu(a, permc_spec=spec)
         an = _Analysis(a, lu.perm_r, lu.perm_c)
+        an.spec = spec
         if an.ok and (best is None or len(an.li) + len(an.ui) < len(best.li) + len(best.ui)):
             best = an
     if best is None:
@@ -261,7 +269,9 @@ class RefactorLU:
                 orders.insert(0, orders.pop(k))
                 self.refactored += 1
                 return
-        an = _fresh_analysis(a)
+        # a pattern seen before keeps the column ordering that won there (only the pivots
+        # need renewing)
+        an = _fresh_analysis(a, orders[0].spec if orders else None)
         self.fresh += 1
         self._use(an, a)
         if not self._refactor(a):
