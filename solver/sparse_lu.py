@@ -153,10 +153,12 @@ def _solve(n: int, perm_r: IntArray, perm_c: IntArray, lp: IntArray, li: IntArra
 
 
 class _Analysis:
-    """What a pattern's factorizations share: permutations, the map from A's stored entries
-    to B's, the structure of L and U."""
+    """What a pattern's factorizations share: permutations (and the name of the column
+    ordering, ``spec``), the map from A's stored entries to B's, the structure of L and U."""
 
-    def __init__(self, a: sp.csc_matrix, perm_r: IntArray, perm_c: IntArray) -> None:
+    def __init__(self, a: sp.csc_matrix, perm_r: IntArray, perm_c: IntArray,
+                 spec: str = "COLAMD") -> None:
+        self.spec = spec
         n = self.n = a.shape[0]
         # B[perm_r[i], perm_c[j]] = A[i, j]; tag each stored entry to find where it goes
         tag = sp.csc_matrix((np.arange(1, a.nnz + 1, dtype=float), a.indices, a.indptr),
@@ -195,8 +197,7 @@ def _fresh_analysis(a: sp.csc_matrix, spec: str | None = None) -> _Analysis:
         with warnings.catch_warnings():
             warnings.simplefilter("error", spla.MatrixRankWarning)
             lu = spla.splu(a, permc_spec=spec)
-        an = _Analysis(a, lu.perm_r, lu.perm_c)
-        an.spec = spec
+        an = _Analysis(a, lu.perm_r, lu.perm_c, spec)
         if an.ok and (best is None or len(an.li) + len(an.ui) < len(best.li) + len(best.ui)):
             best = an
     if best is None:
