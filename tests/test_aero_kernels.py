@@ -24,30 +24,15 @@ import pytest
 
 from solver.air import FlightCondition
 from solver.inflow import DynamicInflow
-from solver.lifting_line import COMPLEX_STEP, LiftingLine, LiftingLineSet
-from solver.model import Model
+from solver.lifting_line import COMPLEX_STEP, LiftingLineSet
 from solver.system import System
-from tests.test_lifting_line import RHO, _beam, rotor
+from tests.test_lifting_line import RHO, beam_line, rotor
 
 TOL = 1e-13
 
 
-def beam_line() -> Model:
-    flight = FlightCondition(40.0, 0.05, RHO)
-    beam = _beam(n_el=2, length=4.0)
-    inflow = DynamicInflow("inflow", flight, 4.0, 20.0, model="peters-he", harmonics=2,
-                           power=3, initial_thrust=0.004)
-    line = LiftingLine("aero", beam, flight, chord=0.3, pitch=lambda s: 0.1 - 0.02 * s,
-                       quarter_chord=0.02, drag=0.01, lift_slope=5.7, wake_states=4,
-                       inflow=inflow, span=(0.5, 4.0), lift_end=3.8, points=3,
-                       zero_lift_angle=-0.03)
-    model = Model()
-    model.add(beam, inflow, line)
-    return model
-
-
 MODELS = {
-    "beam, peters-he": beam_line,
+    "beam, peters-he": lambda: beam_line(zero_lift_angle=-0.03)[0],
     "bodies, pitt-peters": lambda: rotor(np.radians(8.0), flight=FlightCondition(20.0, 0.05,
                                                                                 RHO))[0],
     "bodies, quasi-steady": lambda: rotor(np.radians(8.0), n=0)[0],

@@ -306,18 +306,25 @@ def test_ep_books_the_air_work_exactly():
     assert np.ptp(rec) < 1e-10 * 200.0 * 0.05**2, np.ptp(rec)
 
 
-def test_complex_step_jacobians_match_finite_differences():
-    """∂f/∂q, ∂f/∂v, ∂f/∂a of a twisted, moving beam line in forward flight with a Peters–He
-    inflow, against central differences of the forces."""
+def beam_line(zero_lift_angle: float = 0.0) -> tuple[Model, LiftingLine]:
+    """A twisted two-element beam line in forward flight with a Peters–He inflow."""
     flight = FlightCondition(40.0, 0.05, RHO)
     beam = _beam(n_el=2, length=4.0)
     inflow = DynamicInflow("inflow", flight, 4.0, 20.0, model="peters-he", harmonics=2,
                            power=3, initial_thrust=0.004)
     line = LiftingLine("aero", beam, flight, chord=0.3, pitch=lambda s: 0.1 - 0.02 * s,
                        quarter_chord=0.02, drag=0.01, lift_slope=5.7, wake_states=4,
-                       inflow=inflow, span=(0.5, 4.0), lift_end=3.8, points=3)
+                       inflow=inflow, span=(0.5, 4.0), lift_end=3.8, points=3,
+                       zero_lift_angle=zero_lift_angle)
     model = Model()
     model.add(beam, inflow, line)
+    return model, line
+
+
+def test_complex_step_jacobians_match_finite_differences():
+    """∂f/∂q, ∂f/∂v, ∂f/∂a of a twisted, moving beam line in forward flight with a Peters–He
+    inflow, against central differences of the forces."""
+    model, line = beam_line()
     system = System(model)
     rng = np.random.default_rng(3)
     q = system.q0_raw + 1e-2 * rng.standard_normal(system.n)
