@@ -286,7 +286,7 @@ class DynamicInflow(Element):
             self._shape_tables = (np.array([k == "s" for k, _, _ in self._states], dtype=np.int64),
                                   np.array([r for _, r, _ in self._states], dtype=np.int64),
                                   coef, ncoef)
-            # ½τ weights: 1/(2π) for the axisymmetric states, 1/π for the harmonics
+            # ½τ weights, with τ = 1/(2π) for the axisymmetric states and 1/π for the harmonics
             self._half_tau = np.array([0.25 / math.pi if r == 0 else 0.5 / math.pi
                                        for (_, r, _) in self._states])
         self._dlp = np.array([p * self._lp[p] for p in range(1, len(self._lp))])
