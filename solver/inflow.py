@@ -289,7 +289,7 @@ class DynamicInflow(Element):
             # ½τ weights, with τ = 1/(2π) for the axisymmetric states and 1/π for the harmonics
             self._half_tau = np.array([0.25 / math.pi if r == 0 else 0.5 / math.pi
                                        for (_, r, _) in self._states])
-        self._dlp = np.array([p * self._lp[p] for p in range(1, len(self._lp))])
+        self._dlp = self._lp[1:] * np.arange(1, len(self._lp))[:, None, None]  # p L_p, p ≥ 1
         self._fit = self._fit_vectors()
 
     # -- validation ---------------------------------------------------------------------
@@ -512,7 +512,7 @@ class DynamicInflow(Element):
 
     def l_matrix(self, skew: float) -> Array:
         """The full L matrix (dimensionless) at wake skew X = tan(χ/2), in state order."""
-        return sum(skew**p * self._lp[p] for p in range(len(self._lp)))
+        return np.tensordot(skew ** np.arange(len(self._lp)), self._lp, axes=1)
 
     def rhs(self, states: ArrayLike, jacobian: bool = False):
         """f = −V L⁻¹ α, the element's own right-hand side (dimensionless; the equation in
@@ -523,18 +523,16 @@ class DynamicInflow(Element):
         a = np.asarray(states, dtype=float)
         vt, vm, x, dvt, dvm, dx = self._flow_terms(float(self._mom @ a))
         big = self.l_matrix(x)
-        lu_inv = np.linalg.inv(big)
-        u = lu_inv @ a
         v = np.full(len(a), vm)
         v[0] = vt  # the thrust state sees the total flow, the others its linearization
+        u = np.linalg.solve(big, a)  # L⁻¹α (no inverse unless the Jacobian needs it)
         f = -v * u
         if not jacobian:
             return f
+        lu_inv = np.linalg.inv(big)
         dv = np.full(len(a), dvm)
         dv[0] = dvt
-        dbig = np.zeros_like(big)  # dL/dX
-        for p, dlp in enumerate(self._dlp):
-            dbig += x**p * dlp
+        dbig = np.tensordot(x ** np.arange(len(self._dlp)), self._dlp, axes=1)  # dL/dX
         # d(L⁻¹α) = L⁻¹ dα − L⁻¹ (dL/dX) L⁻¹α dX, dX = (dX/dλ_m) c·dα, dV = (dV/dλ_m) c·dα
         du = lu_inv - np.outer(lu_inv @ (dbig @ u) * dx, self._mom)
         jac = -v[:, None] * du - np.outer(dv * u, self._mom)
