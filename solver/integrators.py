@@ -105,6 +105,9 @@ class Integrator:
     """
 
     name = "base"
+    # the scheme equals its own adjoint (Φ_{−h} = Φ_h⁻¹): its error has odd powers of h per
+    # step only, so symmetric compositions raise its order (solver.composition)
+    symmetric = False
 
     def __init__(self, system: System, h: float, t0: float = 0.0, q0: Array | None = None,
                  v0: Array | None = None, reuse_jacobian: bool = True,
@@ -330,6 +333,7 @@ class EnergyPreserving(Integrator):
     (``alpha`` is the midpoint weight ½ in Δq = h[(1−α)v_i + αv_f].)"""
 
     name = "ep"
+    symmetric = True  # midpoint kinematics, midpoint forces, discrete gradients
     alpha = 0.5
 
     def _begin(self) -> None:
