@@ -21,7 +21,9 @@ How it works:
   it in its column (threshold partial pivoting's test). If one is not, that matrix is
   factored afresh by SuperLU, and its pivots are kept for the next ones.
 
-The solves are compiled triangular sweeps.
+The factors keep only their entries that come out nonzero (:func:`_numeric`): on the planar
+chain's Newton matrix two thirds of the structural ones are exact zeros. The solves are
+compiled triangular sweeps over them.
 """
 
 from __future__ import annotations
@@ -150,23 +152,36 @@ def _heap_pop(heap: IntArray, size: int) -> int:
 
 @njit(cache=True)
 def _numeric(n: int, bp: IntArray, bi: IntArray, bx: Array, lp: IntArray, li: IntArray,
-             lx: Array, up: IntArray, ui: IntArray, ux: Array, d: Array, x: Array,
-             threshold: float) -> int:
-    """Left-looking LU of B with the given structure and no pivoting: fills lx (unit lower
-    L below the diagonal), ux (U above it) and d (U's diagonal). x is an all-zero work
-    vector of length n, left all zero. Returns −1, or the first column whose pivot fails the
-    threshold test."""
+             up: IntArray, ui: IntArray, fp: IntArray, fi: IntArray, fx: Array, gp: IntArray,
+             gi: IntArray, gx: Array, d: Array, x: Array, threshold: float) -> int:
+    """Left-looking LU of B with the given structure (lp, li; up, ui) and no pivoting.
+
+    Only the entries that come out nonzero are stored: L strictly below the diagonal (unit
+    diagonal) in (fp, fi, fx), U strictly above it in (gp, gi, gx), both CSC with the
+    structure's capacity, and U's diagonal in d. Many structural entries are exact zeros (on
+    the planar chain's Newton matrix 4631 of 6774, the out-of-plane couplings), and an exact
+    zero changes nothing where it would be applied (x − 0·y = x), so leaving them out gives
+    the same values as the full structure, in the later columns of this step and in
+    :func:`_solve`, for less work. x is an all-zero work vector of length n, left all zero.
+    Returns −1, or the first column whose pivot fails the threshold test."""
+    nl = 0
+    nu = 0
+    fp[0] = 0
+    gp[0] = 0
     for j in range(n):
         for p in range(bp[j], bp[j + 1]):
             x[bi[p]] = bx[p]
         for p in range(up[j], up[j + 1]):
             i = ui[p]
             xi = x[i]
-            ux[p] = xi
             x[i] = 0.0
             if xi != 0.0:
-                for q in range(lp[i], lp[i + 1]):
-                    x[li[q]] -= lx[q] * xi
+                gi[nu] = i
+                gx[nu] = xi
+                nu += 1
+                for q in range(fp[i], fp[i + 1]):
+                    x[fi[q]] -= fx[q] * xi
+        gp[j + 1] = nu
         piv = x[j]
         x[j] = 0.0
         big = 0.0
@@ -179,8 +194,13 @@ def _numeric(n: int, bp: IntArray, bi: IntArray, bx: Array, lp: IntArray, li: In
         d[j] = piv
         for q in range(lp[j], lp[j + 1]):
             r = li[q]
-            lx[q] = x[r] / piv
+            lv = x[r] / piv
             x[r] = 0.0
+            if lv != 0.0:
+                fi[nl] = r
+                fx[nl] = lv
+                nl += 1
+        fp[j + 1] = nl
     return -1
 
 
@@ -290,15 +310,18 @@ class RefactorLU:
     def _use(self, an: _Analysis, a: sp.csc_matrix) -> None:
         self._an = an
         self._ptr, self._ind = a.indptr, a.indices
-        self._lx = np.empty(len(an.li))
-        self._ux = np.empty(len(an.ui))
+        # the nonzero entries of L and U (CSC, at most the structure's), see _numeric
+        self._l = (np.zeros(an.n + 1, dtype=np.int64), np.empty(len(an.li), dtype=np.int64),
+                   np.empty(len(an.li)))
+        self._u = (np.zeros(an.n + 1, dtype=np.int64), np.empty(len(an.ui), dtype=np.int64),
+                   np.empty(len(an.ui)))
         self.diagonal = np.empty(an.n)
         self._work = np.zeros(an.n)
 
     def _refactor(self, a: sp.csc_matrix) -> bool:
         an = self._an
-        return _numeric(an.n, an.bp, an.bi, a.data[an.src], an.lp, an.li, self._lx, an.up,
-                        an.ui, self._ux, self.diagonal, self._work, PIVOT_THRESHOLD) < 0
+        return _numeric(an.n, an.bp, an.bi, a.data[an.src], an.lp, an.li, an.up, an.ui,
+                        *self._l, *self._u, self.diagonal, self._work, PIVOT_THRESHOLD) < 0
 
     def factor(self, mat) -> None:
         """Factor ``mat``. Raises RuntimeError or ``MatrixRankWarning`` (as SuperLU does) if
@@ -347,8 +370,7 @@ class RefactorLU:
         if an is None:
             raise RuntimeError("solve before a successful factor")
         b = np.asarray(b, dtype=float)
-        args = (an.n, an.perm_r, an.perm_c, an.lp, an.li, self._lx, an.up, an.ui, self._ux,
-                self.diagonal)
+        args = (an.n, an.perm_r, an.perm_c, *self._l, *self._u, self.diagonal)
         if b.ndim == 1:
             return _solve(*args, np.ascontiguousarray(b))
         return np.column_stack([_solve(*args, np.ascontiguousarray(b[:, k]))
