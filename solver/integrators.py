@@ -175,8 +175,10 @@ class Integrator:
         v = self.v if v is None else v
         return self.sys.kinetic(v) + self.sys.potential(q)
 
-    def _converged(self, x: Array, dx: Array) -> bool:
-        return float(np.abs(dx[: self._nk]).max()) <= self.tol * self.scale
+    def _error(self, dx: Array) -> float:
+        """Size of a Newton update of x: the largest change of the kinematic unknowns (Newton
+        stops when it is at most ``tol`` times the scale of q)."""
+        return float(np.abs(dx[: self._nk]).max())
 
     _full = False
     _stale_failures = 0
@@ -234,8 +236,9 @@ class Integrator:
         """One step: Newton on the scheme's residual with the scheme's tangent."""
         self._begin()
         x0 = self._predict(self._start())
-        res = newton(self._residual, self._jacobian, x0, self._converged, self.lin,
-                     self._reuse_now(), full=self._full, estimate=self.tol >= ESTIMATE_TOL)
+        res = newton(self._residual, self._jacobian, x0, self._error, self.tol * self.scale,
+                     self.lin, self._reuse_now(), full=self._full,
+                     estimate=self.tol >= ESTIMATE_TOL)
         self._reuse_outcome(res)
         if not res.converged:
             return StepInfo(False, res.iterations, res.factorizations,

@@ -13,6 +13,7 @@ contraction rate predicts, rate/(1 − rate)·|Δx|, instead of confirming with 
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -86,17 +87,27 @@ def _factor(solver, jacobian, x) -> str:
         return f"Newton diverged (the Newton matrix is not finite: {exc})"
 
 
+def _finite(r: NDArray) -> bool:
+    """All entries finite. r·r is finite only if they all are (a NaN or an infinity makes it
+    NaN or infinite), and costs a third of ``np.isfinite(r).all()`` on a chain's residual; the
+    full test runs only when r·r is not finite, which an overflow of finite entries can also
+    cause."""
+    return math.isfinite(r @ r) or bool(np.isfinite(r).all())
+
+
 def newton(residual: Callable[[NDArray], NDArray], jacobian: Callable[[NDArray], object],
-           x0: NDArray, converged: Callable[[NDArray, NDArray], bool], solver: LinearSolver,
+           x0: NDArray, error: Callable[[NDArray], float], tol: float, solver: LinearSolver,
            reuse: bool = True, full: bool = False, estimate: bool = False) -> NewtonResult:
     """Solve residual(x) = 0 from x0.
 
-    ``converged(x, dx)`` decides convergence after each update; ``solver`` keeps LU factors
-    that are reused across calls when ``reuse`` is true. ``full`` refactors at every iteration
-    and only gives up on non-finite values or the iteration limit (the robust retry).
-    ``estimate`` also accepts an update whose error estimate from the contraction rate,
-    rate/(1 − rate)·dx, passes ``converged`` (for tolerances well above roundoff, where that
-    estimate means something).
+    An update dx has converged when ``error(dx) <= tol``; ``error`` must be a maximum norm
+    (of dx or of some of its entries), so that the scaled tests below, of c·dx for a c > 0,
+    are c·error(dx) without a second evaluation (exactly: rounding is monotone, so
+    max|fl(c·dxᵢ)| = fl(c·max|dxᵢ|)). ``solver`` keeps LU factors that are reused across
+    calls when ``reuse`` is true. ``full`` refactors at every iteration and only gives up on
+    non-finite values or the iteration limit (the robust retry). ``estimate`` also accepts an
+    update whose error estimate from the contraction rate, rate/(1 − rate)·dx, passes the
+    test (for tolerances well above roundoff, where that estimate means something).
     """
     x = x0.copy()
     nfact = 0
@@ -115,17 +126,20 @@ def newton(residual: Callable[[NDArray], NDArray], jacobian: Callable[[NDArray],
             r = residual(x)
         except ArithmeticError:  # e.g. a division by zero far from the solution
             r = np.full_like(x, np.nan)
-        if not np.isfinite(r).all():
+        if not _finite(r):
             return NewtonResult(x, False, it, nfact, "non-finite residual (Newton diverged)",
                                 residual=r)
         dx = solver.lu.solve(-r)
-        if not np.isfinite(dx).all():
+        size = float(np.abs(dx).max())  # NaN or infinite exactly when an entry is
+        if not math.isfinite(size):
             return NewtonResult(x, False, it, nfact, "non-finite Newton update", residual=r)
         x += dx
-        size = float(np.abs(dx).max())
-        rate = size / prev if np.isfinite(prev) and prev > 0 else 0.0
+        err = error(dx)
+        rate = size / prev if math.isfinite(prev) and prev > 0 else 0.0
+        # converged, or stagnating at the roundoff floor (tiny updates that no longer shrink)
+        done = err <= tol or (rate > 0.5 and err * ROUNDOFF_FLOOR <= tol)
         if full:
-            if converged(x, dx) or (rate > 0.5 and converged(x, dx * ROUNDOFF_FLOOR)):
+            if done:
                 return NewtonResult(x, True, it, nfact)
             msg = _factor(solver, jacobian, x)
             nfact += 1
@@ -133,12 +147,11 @@ def newton(residual: Callable[[NDArray], NDArray], jacobian: Callable[[NDArray],
                 return NewtonResult(x, False, it, nfact, msg)
             prev = size
             continue
-        # converged, or stagnating at the roundoff floor (tiny updates that no longer shrink)
-        if converged(x, dx) or (rate > 0.5 and converged(x, dx * ROUNDOFF_FLOOR)):
+        if done:
             return NewtonResult(x, True, it, nfact, stale_refactored=stale_bad)
         # the error left after this update, from the contraction rate: rate/(1 − rate)·|dx|
         # (scipy radau.py's test); it saves the update that would only confirm convergence
-        if estimate and 0.0 < rate < ERROR_RATE and converged(x, dx * (rate / (1.0 - rate))):
+        if estimate and 0.0 < rate < ERROR_RATE and err * (rate / (1.0 - rate)) <= tol:
             return NewtonResult(x, True, it, nfact, stale_refactored=stale_bad)
         if rate > SLOW_RATE or (not fresh and (it >= 4 or rate > STALE_RATE)):
             stale_bad = stale_bad or (started_stale and not fresh and it <= 2)
