@@ -103,6 +103,9 @@ class ElementSet:
     n_nonholonomic: int = 0
     nh_rows: IArray = EMPTY_I
     nh_cols: IArray = EMPTY_I
+    # the gradient does not depend on q (a linear potential, e.g. gravity), nor then does the
+    # discrete gradient: the system evaluates it once
+    constant_gradient: bool = False
     # does a constraint depend on time explicitly (drivers), does the set do work on the system
     time_dependent: bool = False
     nonconservative: bool = False

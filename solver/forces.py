@@ -53,6 +53,8 @@ class Gravity(Element):
 class GravitySet(ElementSet):
     """Potential Σ −m g·x over the bodies with mass (linear: constant gradient)."""
 
+    constant_gradient = True
+
     def __init__(self, elements, system) -> None:
         super().__init__(elements, system)
         g = np.sum([np.asarray(e.g, dtype=float) for e in elements], axis=0)

@@ -235,7 +235,7 @@ class Integrator:
     def _solve(self) -> StepInfo:
         """One step: Newton on the scheme's residual with the scheme's tangent."""
         self._begin()
-        x0 = self._predict(self._start())
+        x0 = self._predict()
         res = newton(self._residual, self._jacobian, x0, self._error, self.tol * self.scale,
                      self.lin, self._reuse_now(), full=self._full,
                      estimate=self.tol >= ESTIMATE_TOL)
@@ -302,13 +302,15 @@ class Integrator:
     def _finish(self, x: Array) -> None:
         raise NotImplementedError
 
-    def _predict(self, default: Array) -> Array:
+    def _predict(self) -> Array:
         """Newton start for x = (Δq, μ, ν): Δq extrapolated quadratically from the last three
         increments (a cubic in q, error O(h⁴)); the multipliers linearly from the last two
-        (they can carry the midpoint rule's two-step mode, which higher orders amplify)."""
+        (they can carry the midpoint rule's two-step mode, which higher orders amplify).
+        The scheme's plain predictor (:meth:`_start`) until two increments are known (only
+        then: it costs a dozen vector operations that the extrapolation would discard)."""
         hist = getattr(self, "_x_hist", ())
         if len(hist) < 2:
-            return default
+            return self._start()
         x = 2.0 * hist[-1] - hist[-2]
         if len(hist) == 3:
             n = self._nk
@@ -367,7 +369,10 @@ class EnergyPreserving(Integrator):
         r1 = s.mass_mul(dq) - self._hMv
         if len(self.first):
             r1 += (self.alpha * h) * (s.A1 @ dq)
-        r1 += c * (s.discrete_gradient(qi, qf) - s.applied(qm, dq / h, self._tm, self._acc(dq)))
+        load = s.discrete_gradient(qi, qf)
+        if s.force_sets:  # else f = 0, and ∇̄V − 0 is ∇̄V to the bit
+            load = load - s.applied(qm, dq / h, self._tm, self._acc(dq))
+        r1 += c * load
         r1 += s.gmul_T(gbar, mu)
         parts = [r1, s.constraint(qf, self._tf)]
         if s.mn:
@@ -425,6 +430,7 @@ class GeneralizedAlpha(Integrator):
         self._dv_dx = np.full(system.n, self.gamma / (self.beta * self.h))
         self._dv_dx[self.first] = self._k1
         self._has_first = bool(len(self.first))
+        self._rates_used = self._has_first or bool(system.force_sets) or system.mn > 0
 
     def _begin(self) -> None:
         s, h = self.sys, self.h
@@ -450,27 +456,40 @@ class GeneralizedAlpha(Integrator):
             dq[self.first] = h * self.v[self.first]
         return np.concatenate([dq, self._sc * self.lam, self._sc * self.nu])
 
-    def _unpack(self, x):
-        s, h = self.sys, self.h
-        n, mh = s.n, s.mh
-        dq = x[:n]
+    def _rates(self, dq):
+        """(v_f, a_α) that the increment Δq implies: the end velocity and the α-acceleration."""
+        h = self.h
         anew = (dq - self._base) / (self.beta * h * h)
         vf = self._vconst + h * self.gamma * anew
         if self._has_first:
             f = self.first
             vf[f] = self._k1 * dq[f] + self._k0
+        return vf, anew
+
+    def _unpack(self, x):
+        n, mh = self.sys.n, self.sys.mh
+        dq = x[:n]
+        vf, anew = self._rates(dq)
         return dq, self.q + dq, vf, anew, x[n : n + mh], x[n + mh :]
 
     def _residual(self, x):
         s, b, h, g, sc = self.sys, self.beta, self.h, self.gamma, self._sc
-        dq, qf, vf, _anew, mu, nu = self._unpack(x)
+        n, mh = s.n, s.mh
+        dq, mu, nu = x[:n], x[n : n + mh], x[n + mh :]
+        qf = self.q + dq
+        # the rates enter only through loads, first-order states and nonholonomic rows (a
+        # chain has none of them: its residual skips their vector operations)
+        vf, anew = self._rates(dq) if self._rates_used else (None, None)
         c, gf = s.constraint_and_jacobian(qf, self._tf)
         r1 = s.mass_mul(dq) + self._mconst
         if len(self.first):
             rate = np.zeros(s.n)
             rate[self.first] = vf[self.first]
             r1 += sc * (s.A1 @ rate)
-        r1 += sc * (s.gradient(qf) - s.applied(qf, vf, self._tf, self._acc(_anew)))
+        load = s.gradient(qf)
+        if s.force_sets:  # else f = 0, and ∇V − 0 is ∇V to the bit
+            load = load - s.applied(qf, vf, self._tf, self._acc(anew))
+        r1 += sc * load
         r1 += s.gmul_T(gf, mu)
         parts = [r1, c]
         if s.mn:

@@ -115,6 +115,7 @@ class System:
         self.time_dependent = any(s.time_dependent for s in sets)
         self.has_nonconservative = any(s.nonconservative or s.time_dependent for s in sets)
         self._build_pattern()
+        self._constant_gradient = self._gradient_once()
 
     # ------------------------------------------------------------------ layout helpers
     @property
@@ -277,11 +278,24 @@ class System:
         return np.bincount(idx, vals, minlength=self.n)
 
     def gradient(self, q: Array) -> Array:
+        if self._constant_gradient is not None:
+            return self._constant_gradient
         return self._gather(self._grad_idx, [s.gradient(q) for s in self.potential_sets])
 
     def discrete_gradient(self, qi: Array, qf: Array) -> Array:
+        if self._constant_gradient is not None:
+            return self._constant_gradient
         return self._gather(self._grad_idx,
                             [s.discrete_gradient(qi, qf) for s in self.potential_sets])
+
+    def _gradient_once(self) -> Array | None:
+        """The gradient, read-only, if every potential is linear in q (gravity alone): the
+        residuals then skip a scatter of constants at every Newton iteration."""
+        if not all(s.constant_gradient for s in self.potential_sets):
+            return None
+        g = self._gather(self._grad_idx, [s.gradient(self.q0_raw) for s in self.potential_sets])
+        g.flags.writeable = False
+        return g
 
     def stiffness_values(self, q: Array) -> Array:
         return _cat([s.stiffness(q) for s in self.stiff_sets], float)
