@@ -39,6 +39,7 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
 
+from solver.jit import njit
 from solver.newton import LinearSolver, newton
 from solver.system import System
 
@@ -54,6 +55,70 @@ CONSTRAINT_TOL = 3e-15
 # (16 links, ep, 5000 steps: 8.6e-8 J against 4.9e-10 J).
 ESTIMATE_TOL = 1e-12
 PROJECTION_MAXITER = 50  # Iterations allowed for the initial projection onto C(q) = 0.
+
+
+# ---------------------------------------------------------------------- compiled step algebra
+# The vector formulas evaluated once per step or per Newton iteration on the whole state. On
+# small models a dozen NumPy operations on short vectors cost more in calls than in arithmetic
+# (16-link chain: about a quarter of a step), so each formula is one compiled pass. Each is
+# written operation by operation in NumPy's order (numba neither fuses multiply-adds nor
+# reassociates without fastmath), so the values are the same to the bit.
+@njit(cache=True)
+def _extrapolate(x0: Array, x1: Array, x2: Array, nk: int, cubic: bool) -> Array:
+    """2 x₂ − x₁ (a line through the last two), and in the first ``nk`` entries, if
+    ``cubic``, 3 x₂ − 3 x₁ + x₀ (a parabola through the last three)."""
+    out = np.empty(len(x2))
+    for i in range(len(x2)):
+        out[i] = 2.0 * x2[i] - x1[i]
+    if cubic:
+        for i in range(nk):
+            out[i] = 3.0 * x2[i] - 3.0 * x1[i] + x0[i]
+    return out
+
+
+@njit(cache=True)
+def _galpha_begin(h: float, beta: float, gamma: float, am: float, af: float, v: Array,
+                  a: Array, qdd: Array) -> tuple[Array, Array, Array]:
+    """What a generalized-α step keeps from the previous one (v_i, the α-acceleration a_i,
+    q̈_i): Δq at a zero α-acceleration, base = h v_i + h²(½ − β) a_i; the vector
+    −base + βh²(α_m a_i − α_f q̈_i)/(1 − α_m), whose product with M is the constant of the
+    momentum rows; and v_i + h(1 − γ) a_i, the constant of v_f."""
+    n = len(v)
+    base = np.empty(n)
+    m = np.empty(n)
+    vc = np.empty(n)
+    hb = h * h * (0.5 - beta)
+    bhh = beta * h * h
+    hg = h * (1 - gamma)
+    for i in range(n):
+        base[i] = h * v[i] + hb * a[i]
+        m[i] = -base[i] + bhh * (am * a[i] - af * qdd[i]) / (1 - am)
+        vc[i] = v[i] + hg * a[i]
+    return base, m, vc
+
+
+@njit(cache=True)
+def _galpha_rates(dq: Array, base: Array, vconst: Array, bhh: float,
+                  hg: float) -> tuple[Array, Array]:
+    """(v_f, a_α) that the increment Δq implies: a_α = (Δq − base)/(βh²) and
+    v_f = v_const + hγ a_α (``bhh`` = βh², ``hg`` = hγ)."""
+    n = len(dq)
+    vf = np.empty(n)
+    anew = np.empty(n)
+    for i in range(n):
+        anew[i] = (dq[i] - base[i]) / bhh
+        vf[i] = vconst[i] + hg * anew[i]
+    return vf, anew
+
+
+@njit(cache=True)
+def _galpha_acceleration(am: float, af: float, anew: Array, a: Array, qdd: Array) -> Array:
+    """q̈_{n+1} from the α-accelerations a_{n+1}, a_n and q̈_n:
+    ((1 − α_m) a_{n+1} + α_m a_n − α_f q̈_n)/(1 − α_f)."""
+    out = np.empty(len(anew))
+    for i in range(len(anew)):
+        out[i] = ((1 - am) * anew[i] + am * a[i] - af * qdd[i]) / (1 - af)
+    return out
 
 
 @dataclass
@@ -311,11 +376,7 @@ class Integrator:
         hist = getattr(self, "_x_hist", ())
         if len(hist) < 2:
             return self._start()
-        x = 2.0 * hist[-1] - hist[-2]
-        if len(hist) == 3:
-            n = self._nk
-            x[:n] = 3.0 * hist[2][:n] - 3.0 * hist[1][:n] + hist[0][:n]
-        return x
+        return _extrapolate(hist[0], hist[-2], hist[-1], self._nk, len(hist) == 3)
 
     def _history(self, x: Array) -> None:
         hist = getattr(self, "_x_hist", ())
@@ -438,9 +499,8 @@ class GeneralizedAlpha(Integrator):
         vi, ai, qddi = self.v, self.acc, self.qdd
         self._tf = self.t + h
         self._sc = b * h * h * (1 - af) / (1 - am)
-        self._base = h * vi + h * h * (0.5 - b) * ai
-        self._mconst = s.mass_mul(-self._base + b * h * h * (am * ai - af * qddi) / (1 - am))
-        self._vconst = vi + h * (1 - g) * ai
+        self._base, m, self._vconst = _galpha_begin(h, b, g, am, af, vi, ai, qddi)
+        self._mconst = s.mass_mul(m)
         f = self.first
         g1 = self.gamma1
         # ẋ_f = k1 Δx + k0: from w_f = (Δx − h(1−γ)w_i)/(γh) and the α-filter of the rates
@@ -459,8 +519,7 @@ class GeneralizedAlpha(Integrator):
     def _rates(self, dq):
         """(v_f, a_α) that the increment Δq implies: the end velocity and the α-acceleration."""
         h = self.h
-        anew = (dq - self._base) / (self.beta * h * h)
-        vf = self._vconst + h * self.gamma * anew
+        vf, anew = _galpha_rates(dq, self._base, self._vconst, self.beta * h * h, h * self.gamma)
         if self._has_first:
             f = self.first
             vf[f] = self._k1 * dq[f] + self._k0
@@ -511,14 +570,14 @@ class GeneralizedAlpha(Integrator):
         """q̈_{n+1} from the α-acceleration (what added masses see), or None."""
         if not self.sys.accel_sets:
             return None
-        return ((1 - self.am) * anew + self.am * self.acc - self.af * self.qdd) / (1 - self.af)
+        return _galpha_acceleration(self.am, self.af, anew, self.acc, self.qdd)
 
     def _finish(self, x):
         s, h = self.sys, self.h
         am, af = self.am, self.af
         dq, qf, vf, anew, mu, nu = self._unpack(x)
         ai, qddi = self.acc, self.qdd
-        qdd = ((1 - am) * anew + am * ai - af * qddi) / (1 - af)
+        qdd = _galpha_acceleration(am, af, anew, ai, qddi)
         if self._has_first:
             f = self.first
             anew[f] = (dq[f] - h * (1 - self.gamma1) * ai[f]) / (self.gamma1 * h)  # w_f

@@ -186,7 +186,10 @@ class QuadraticConstraints:
         return self._evaluate(q, t, 0, jac), jac
 
     def _evaluate(self, q, t, order, jac):
-        h, g, c = self._scaled(t, order)
+        if order or self.time_dependent:
+            h, g, c = self._scaled(t, order)
+        else:  # the constant coefficients (every Newton iteration of a model without drivers)
+            h, g, c = self.h_val, self.g_val, self.c_val
         return _evaluate(np.ascontiguousarray(q, dtype=float), self.m, h, self.h_row, self.h_i,
                          self.h_j, g, self.g_row, self.g_k, c, self.c_row, jac)
 

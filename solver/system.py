@@ -461,8 +461,9 @@ class System:
         return force, m_cm - np.cross(p - q[o : o + 3], force)
 
 
-def _cat(arrs, dtype=np.int64):
-    arrs = [a for a in arrs if len(a)]
+def _cat(arrs: list, dtype=np.int64) -> NDArray:
+    """The arrays of a list of sets end to end, as ``dtype``."""
     if len(arrs) == 1 and arrs[0].dtype == dtype:
-        return arrs[0]  # the common case of one set: no copy
+        return arrs[0]  # the common case of one set: no copy (and no filtering of empties)
+    arrs = [a for a in arrs if len(a)]
     return np.concatenate(arrs).astype(dtype, copy=False) if arrs else np.zeros(0, dtype=dtype)
