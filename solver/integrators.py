@@ -40,7 +40,7 @@ import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from solver.jit import njit
-from solver.newton import LinearSolver, newton
+from solver.newton import LinearSolver, max_abs, newton
 from solver.system import System
 
 Array = NDArray[np.float64]
@@ -243,7 +243,7 @@ class Integrator:
     def _error(self, dx: Array) -> float:
         """Size of a Newton update of x: the largest change of the kinematic unknowns (Newton
         stops when it is at most ``tol`` times the scale of q)."""
-        return float(np.abs(dx[: self._nk]).max())
+        return max_abs(dx[: self._nk])
 
     _full = False
     _stale_failures = 0
@@ -390,7 +390,7 @@ class Integrator:
     def violation(self) -> float:
         """max |C(q, t)| over the holonomic rows."""
         c = self.sys.constraint(self.q, self.t)
-        return float(np.abs(c).max()) if c.size else 0.0
+        return max_abs(c)
 
 
 class EnergyPreserving(Integrator):
