@@ -317,6 +317,8 @@ class RefactorLU:
                    np.empty(len(an.ui)))
         self.diagonal = np.empty(an.n)
         self._work = np.zeros(an.n)
+        # what every solve passes on but the right-hand side (Newton solves twice a step)
+        self._solve_args = (an.n, an.perm_r, an.perm_c, *self._l, *self._u, self.diagonal)
 
     def _refactor(self, a: sp.csc_matrix) -> bool:
         an = self._an
@@ -370,7 +372,7 @@ class RefactorLU:
         if an is None:
             raise RuntimeError("solve before a successful factor")
         b = np.asarray(b, dtype=float)
-        args = (an.n, an.perm_r, an.perm_c, *self._l, *self._u, self.diagonal)
+        args = self._solve_args
         if b.ndim == 1:
             return _solve(*args, np.ascontiguousarray(b))
         return np.column_stack([_solve(*args, np.ascontiguousarray(b[:, k]))
