@@ -66,14 +66,14 @@ def test_pivot_that_vanishes_is_replaced():
 
 
 def test_threshold_test_sends_small_pivots_back():
-    """With the pivot at 1e-3 of the entry below it (under the 1e-2 threshold) the refactor
+    """With the pivot at 1e-4 of the entry below it (under the 1e-3 threshold) the refactor
     is refused and SuperLU pivots afresh."""
-    assert sparse_lu.PIVOT_THRESHOLD == pytest.approx(1e-2)
+    assert sparse_lu.PIVOT_THRESHOLD == pytest.approx(1e-3)
     a = sp.csc_matrix(np.array([[4.0, 1.0], [1.0, 3.0]]))
     lu = RefactorLU()
     lu.factor(a)
     n0 = lu.fresh
-    small = sp.csc_matrix((np.array([1e-3, 1.0, 1.0, 3.0]), a.indices, a.indptr), shape=(2, 2))
+    small = sp.csc_matrix((np.array([1e-4, 1.0, 1.0, 3.0]), a.indices, a.indptr), shape=(2, 2))
     lu.factor(small)
     assert lu.fresh == n0 + 1
 
