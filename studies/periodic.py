@@ -486,11 +486,13 @@ def richardson(fine: Array, coarse: Array, omega: float, n_max: int,
                order: int = 2) -> tuple[Array, Array]:
     """Richardson extrapolation of the harmonics of a periodic response computed at two steps.
 
-    The periodic response of a symmetric one-step scheme (the midpoint-type ``ep``) has an
-    error expansion in even powers of the step, so the harmonics c(h) = c + a h² + O(h⁴) of
-    the response at h (``fine``) and 2h (``coarse``) give c ≈ c(h) + (c(h) − c(2h))/3 with
-    error O(h⁴). The correction of harmonics 0..n_max, a band-limited periodic signal, is
-    added to every sample of ``fine``; harmonics above n_max keep the fine step's error.
+    The periodic response of a symmetric one-step scheme (the midpoint-type ``ep``, or its
+    symmetric composition, :mod:`solver.composition`) has an error expansion in even powers of
+    the step, so the harmonics c(h) = c + a hᵖ + O(hᵖ⁺²) of the response at h (``fine``) and
+    2h (``coarse``) give c ≈ c(h) + (c(h) − c(2h))/(2ᵖ − 1) with error O(hᵖ⁺²): p = 2 for
+    ``ep`` (the factor 1/3), 4 for its fourth-order composition (1/15). The correction of
+    harmonics 0..n_max, a band-limited periodic signal, is added to every sample of ``fine``;
+    harmonics above n_max keep the fine step's error.
 
     Parameters
     ----------
@@ -502,7 +504,8 @@ def richardson(fine: Array, coarse: Array, omega: float, n_max: int,
     n_max
         Highest harmonic corrected.
     order
-        Order p of the leading error term (2 for ``ep``): the factor is 1/(2^p − 1).
+        Order p of the leading error term (2 for ``ep``, 4 composed): the factor is
+        1/(2^p − 1).
 
     Returns
     -------
