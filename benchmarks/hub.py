@@ -1,11 +1,20 @@
 """Cases per hour of the hub model's built-in study (the paper's Table 1 on the hub model).
 
     python benchmarks/hub.py --workers 1 2 [--profile]
+    python benchmarks/hub.py --case [--repeat 3]
 
 Runs the built-in study with a LocalCluster of 1 and of 2 worker processes (fresh output
 directories, nothing resumed) and prints one JSON object per run with the wall time, the cases
 per hour and each case's solver time and steps per second. ``--profile`` also profiles one case
 in this process (pyinstrument if installed, else cProfile) and prints where the time goes.
+
+``--case`` measures issue 13's per-case goals side by side in one process: one free case at the
+defaults (the composed fourth-order step) and at the previous defaults (the plain step with
+Richardson at 80 and 160 steps/rev), alternately, each ``--repeat`` times after the reference run
+(which also loads the compiled kernels); it prints the best CPU time, the revolutions simulated
+and each one's error against a step-converged reference (the plain step at 320 and 640
+steps/rev, Richardson-extrapolated; its own error about 1e-4): the largest over harmonics 0–8
+of every signal, relative to that signal's largest harmonic.
 """
 
 from __future__ import annotations
@@ -67,11 +76,58 @@ def profile_case() -> None:
                                                           2)}))
 
 
+CASE_SETTINGS = {
+    "default": {},
+    "previous default (plain, Richardson 80 and 160)": {"composition": "none",
+                                                         "steps_per_rev": 160,
+                                                         "richardson": True},
+}
+
+
+def one_case(repeat: int) -> None:
+    import numpy as np
+
+    from studies.hub import run
+    from studies.periodic import rev_harmonics
+
+    def harmonics(ds) -> np.ndarray:  # harmonics 0–8 of the last revolution, at ψ = 0
+        n = ds.attrs["samples_per_rev"]
+        cols = np.column_stack([ds[k].values[..., -n:].T for k in (
+            "hub_x_rotating", "hub_y_rotating", "hub_force_x_fixed", "hub_force_y_fixed",
+            "pin_angle")])
+        psi0 = ds.attrs["hub_speed"] * float(ds["time"].values[-n])
+        return rev_harmonics(cols) * np.exp(-1j * np.arange(9) * psi0)[:, None]
+
+    ref = harmonics(run({"composition": "none", "steps_per_rev": 640, "richardson": True}))
+    scale = np.abs(ref).max(axis=0)
+    cpu: dict[str, list[float]] = {k: [] for k in CASE_SETTINGS}
+    last = {}
+    for _ in range(repeat):
+        for name, given in CASE_SETTINGS.items():
+            t0 = time.process_time()
+            last[name] = run(given)
+            cpu[name].append(time.process_time() - t0)
+    for name, ds in last.items():
+        print(json.dumps({
+            "case": name, "cpu_seconds_best": round(min(cpu[name]), 2),
+            "cpu_seconds": [round(c, 2) for c in cpu[name]],
+            "revolutions": ds.attrs["simulated_revolutions"],
+            "steps": ds.attrs["steps"], "substeps": ds.attrs["substeps"],
+            "newton_iterations": ds.attrs["newton_iterations"],
+            "harmonics_error": float(f"{np.max(np.abs(harmonics(ds) - ref) / scale):.3g}")}))
+
+
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--workers", type=int, nargs="+", default=[1, 2])
     p.add_argument("--profile", action="store_true")
+    p.add_argument("--case", action="store_true",
+                   help="one free case, default and previous default side by side")
+    p.add_argument("--repeat", type=int, default=3)
     a = p.parse_args()
+    if a.case:
+        one_case(a.repeat)
+        return
     if a.profile:
         profile_case()
     for w in a.workers:

@@ -75,6 +75,9 @@ def _symbolic(n: int, bp: IntArray, bi: IntArray) -> tuple:
     nl = 0
     nu = 0
     ok = True
+    # the visit of a reached row (marked once, onto the heap above the diagonal or the list
+    # below it) is written out twice, for B's entries and for L's: as a compiled helper, even
+    # with inline="always", it made this step six times slower
     for j in range(n):
         nh = 0
         nb = 0
