@@ -73,6 +73,11 @@ class Composed:
         if not getattr(integrator, "symmetric", False):
             raise ValueError(f"composition = {method!r} needs a symmetric scheme (ep); "
                              f"{integrator.name!r} is not")
+        delayed = [type(s).__name__ for s in integrator.sys.sets if s.step_history]
+        if delayed:
+            raise ValueError(f"composition = {method!r} steps backwards within a step, which "
+                             f"the step history of {', '.join(delayed)} (delayed feedback) "
+                             "cannot follow")
         self._inner = integrator
         self.method = method
         self.gammas = COMPOSITIONS[method]
@@ -118,7 +123,7 @@ class Composed:
         failed substep's :class:`solver.integrators.StepInfo` is returned (its message says
         which substep)."""
         inner, h = self._inner, self.h
-        start = inner.state()
+        start, work = inner.state(), inner.work
         lin0 = inner.lin
         iterations = factorizations = 0
         info = None
@@ -131,11 +136,13 @@ class Composed:
                 self._histories[k] = inner._x_hist
                 iterations += info.iterations
                 factorizations += info.factorizations
-                if not info.converged:
+                if not info.converged:  # back to the step's start, its work unbooked
                     inner.restore(start)
+                    inner.work = work
                     self._histories = [() for _ in self.gammas]
                     info.message = (f"substep {k + 1} of {len(self.gammas)} ({g:+.3f} h) of "
                                     f"the {self.method} composition: {info.message}")
+                    info.iterations, info.factorizations = iterations, factorizations
                     return info
         finally:
             inner.h = h

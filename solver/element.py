@@ -109,6 +109,9 @@ class ElementSet:
     # does a constraint depend on time explicitly (drivers), does the set do work on the system
     time_dependent: bool = False
     nonconservative: bool = False
+    # does the set keep a history of the converged steps that its forces read back (delays):
+    # then the steps must advance in time (no backward substep, solver.composition)
+    step_history: bool = False
 
     def __init__(self, elements: list, system) -> None:
         self.elements = list(elements)

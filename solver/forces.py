@@ -320,6 +320,7 @@ class RelativeRotationSet(ElementSet):
             self.fq_rows, self.fq_cols = pr, pc
             self.nonconservative = True
         if self._fb:
+            self.step_history = True
             self.a = np.array([e.delayed_stiffness for e in elements])
             self.b = np.array([e.delayed_damping for e in elements])
             self.tau = np.array([e.delay for e in elements])

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from solver.composition import COMPOSITIONS, Composed
-from solver.integrators import make_integrator
+from solver.integrators import StepInfo, make_integrator
 from solver.system import System
-from tests.test_solver_core import oscillator, pendulum, pendulum_period
+from tests.test_solver_core import _feedback_oscillator, oscillator, pendulum, pendulum_period
 
 
 def _composed(model, h: float, method: str | None, tol: float = 1e-13):
@@ -87,6 +87,33 @@ def test_nonsymmetric_schemes_and_unknown_methods_refused():
         Composed(make_integrator(system, "galpha", 0.1), "suzuki")
     with pytest.raises(ValueError, match="composition = 'rk4'"):
         Composed(make_integrator(system, "ep", 0.1), "rk4")
+
+
+def test_delayed_feedback_refused():
+    """A delay line records the converged steps in time order; a backward substep would
+    corrupt it, so a model with delayed feedback cannot be composed."""
+    model, _ = _feedback_oscillator(1.0, feedback=True)
+    with pytest.raises(ValueError, match="delayed feedback"):
+        Composed(make_integrator(System(model), "ep", 0.01), "suzuki")
+
+
+def test_failed_substep_leaves_the_step_undone():
+    """A substep that fails (here the third) takes the state, the time and the booked work back
+    to the step's start, and the message names the substep."""
+    integ = _run(_composed(oscillator(c=0.3), 0.05, "suzuki"), 3)
+    q0, v0, t0, w0 = integ.q.copy(), integ.v.copy(), integ.t, integ.work
+    inner_step, calls = integ._inner.step, []
+
+    def failing_step():
+        calls.append(1)
+        return inner_step() if len(calls) < 3 else StepInfo(False, 30, 1, "Newton diverged")
+
+    integ._inner.step = failing_step
+    info = integ.step()
+    assert not info.converged and "substep 3 of 5" in info.message
+    assert integ.t == t0 and integ.work == w0 and integ.n_steps == 3
+    np.testing.assert_array_equal(integ.q, q0)
+    np.testing.assert_array_equal(integ.v, v0)
 
 
 def test_state_and_restore_round_trip():
