@@ -88,15 +88,14 @@ def one_case(repeat: int) -> None:
     import numpy as np
 
     from studies.hub import run
-    from studies.periodic import rev_harmonics
+    from studies.periodic import referred_harmonics
 
     def harmonics(ds) -> np.ndarray:  # harmonics 0–8 of the last revolution, at ψ = 0
         n = ds.attrs["samples_per_rev"]
-        cols = np.column_stack([ds[k].values[..., -n:].T for k in (
+        rows = np.column_stack([ds["time"].values[-n:], *(ds[k].values[..., -n:].T for k in (
             "hub_x_rotating", "hub_y_rotating", "hub_force_x_fixed", "hub_force_y_fixed",
-            "pin_angle")])
-        psi0 = ds.attrs["hub_speed"] * float(ds["time"].values[-n])
-        return rev_harmonics(cols) * np.exp(-1j * np.arange(9) * psi0)[:, None]
+            "pin_angle"))])
+        return referred_harmonics(rows, ds.attrs["hub_speed"], 8)
 
     ref = harmonics(run({"composition": "none", "steps_per_rev": 640, "richardson": True}))
     scale = np.abs(ref).max(axis=0)

@@ -23,7 +23,7 @@ from solver.rotations import rotation_about
 from solver.symmetry import CyclicSymmetry, affine_combination, director_triads
 from solver.system import System
 from studies import hub
-from studies.periodic import rev_harmonics
+from studies.periodic import referred_harmonics
 
 
 @pytest.fixture(scope="module")
@@ -124,11 +124,10 @@ def test_symmetry_rejects_mismatched_sectors(free_hub):
 def _harmonics(ds, n):
     """Harmonics 0..8 of the last revolution, referred to the azimuth ψ = 0 (a shooting run
     records from a quarter revolution)."""
-    cols = np.column_stack([ds[k].values[..., -n:].T for k in (
+    rows = np.column_stack([ds["time"].values[-n:], *(ds[k].values[..., -n:].T for k in (
         "hub_x_rotating", "hub_y_rotating", "hub_force_x_fixed", "hub_force_y_fixed",
-        "pin_angle")])
-    psi0 = ds.attrs["hub_speed"] * float(ds["time"].values[-n])
-    return rev_harmonics(cols) * np.exp(-1j * np.arange(9) * psi0)[:, None]
+        "pin_angle"))])
+    return referred_harmonics(rows, ds.attrs["hub_speed"], 8)
 
 
 @pytest.mark.slow
