@@ -124,6 +124,8 @@ def main() -> None:
                    help="one free case, default and previous default side by side")
     p.add_argument("--repeat", type=int, default=3)
     a = p.parse_args()
+    if a.repeat < 1:
+        p.error(f"--repeat {a.repeat}: must be at least 1")
     if a.case:
         one_case(a.repeat)
         return
