@@ -41,7 +41,7 @@ from numpy.typing import NDArray
 
 from solver.jit import njit
 from solver.newton import LinearSolver, max_abs, newton
-from solver.system import System
+from solver.system import BLOCKS, System
 
 Array = NDArray[np.float64]
 
@@ -662,7 +662,11 @@ class EnergyDecaying(Integrator):
         self._nk = 2 * n
         weight = abs(s.M).sum(axis=1).A1 + abs(s.A1).sum(axis=1).A1
         self._massless = np.nonzero(weight == 0.0)[0]
-        self._keep_rows = (weight != 0.0).astype(float)
+        # the entries each block puts in the stage-a rows: all but the massless unknowns'
+        # rows (which hold v_a = v_b instead); "GT" and "AT" are the constraint forces' blocks
+        keep = weight != 0.0
+        self._kept_entries = {name: np.nonzero(keep[s.block_pattern(name)[0]])[0]
+                              for name in BLOCKS if name not in ("G", "A")}
         self._scatter = None  # the Newton matrix's CSC pattern, from the first assembly
         self.dissipation = 0.0  # numerical dissipation booked so far (J)
         self._proj: LinearSolver | bool = LinearSolver()  # for the end-velocity projection
@@ -737,7 +741,7 @@ class EnergyDecaying(Integrator):
         n, mh = s.n, s.mh
         xa, xb, dq, _d, qb, qa, qm, mu, _nu, acc = self._unpack(x)
         h2 = h * h
-        keep = self._keep_rows
+        kept = self._kept_entries
         parts: list[tuple[Array, Array, Array]] = []
 
         def put(name: str, vals: Array, places) -> None:
@@ -745,10 +749,11 @@ class EnergyDecaying(Integrator):
             in the stage-a rows (offset 0) the massless unknowns' rows are left out."""
             rows, cols = s.block_pattern(name)
             for r0, c0, w in places:
-                v = w * vals
                 if r0 == 0:
-                    v = v * keep[rows]
-                parts.append((rows + r0, cols + c0, v))
+                    parts.append((rows[kept[name]], cols[kept[name]] + c0,
+                                  w * vals[kept[name]]))
+                else:
+                    parts.append((rows + r0, cols + c0, w * vals))
 
         # ∂∇̄V/∂x_a = ∂∇̄V/∂x_b = ½ ∂∇̄V/∂q_b; q_a = q_i − (x_b − x_a)/6, q_b = q_i + (x_a + x_b)/2
         put("M", s.M_vals, [(0, 0, 3.0), (0, n, 1.0), (n, 0, -3.0), (n, n, 1.0)])
@@ -777,16 +782,15 @@ class EnergyDecaying(Integrator):
         if mh:
             gbar = s.discrete_jacobian_values(self.q, qb, self.t, self._tf)
             g_rows, g_cols = s.block_pattern("G")
-            for r0 in (0, n):  # Ḡᵀμ in both stages' rows
-                v = gbar * keep[g_cols] if r0 == 0 else gbar
-                parts.append((g_cols + r0, g_rows + 2 * n, v))
+            k = kept["GT"]  # Ḡᵀμ in both stages' rows
+            parts += [(g_cols[k], g_rows[k] + 2 * n, gbar[k]), (g_cols + n, g_rows + 2 * n, gbar)]
             put("G", s.jacobian_values(qb, self._tf), [(2 * n, 0, 0.5), (2 * n, n, 0.5)])
         if s.mn:
             am = s.nonholonomic_values(qm)
             a_rows, a_cols = s.block_pattern("A")
-            for r0 in (0, n):
-                v = am * keep[a_cols] if r0 == 0 else am
-                parts.append((a_cols + r0, a_rows + 2 * n + mh, v))
+            k = kept["AT"]
+            parts += [(a_cols[k], a_rows[k] + 2 * n + mh, am[k]),
+                      (a_cols + n, a_rows + 2 * n + mh, am)]
             o = 2 * n + mh
             put("A", am, [(o, 0, 0.5), (o, n, 0.5)])
             put("A", s.nonholonomic_derivative(qm, dq), [(o, 0, 0.25), (o, n, 0.25)])
@@ -803,10 +807,10 @@ class EnergyDecaying(Integrator):
                              np.searchsorted(uniq // size, np.arange(size + 1)).astype(np.int32))
         inv, indices, indptr = self._scatter
         data = np.bincount(inv, vals, minlength=len(indices))
-        # copies: eliminate_zeros below works in place and the pattern is kept for next time
-        mat = sp.csc_matrix((data, indices.copy(), indptr.copy()), shape=(size, size))
-        mat.eliminate_zeros()  # the massless unknowns' masked stage-a entries
-        return mat
+        # one pattern at every call, whatever values come out zero: the LU refactors with the
+        # pivot order of the first matrix only while the pattern stays (dropping the zeros
+        # gave a new pattern, and a fresh SuperLU factorization, at every step of the rotor)
+        return sp.csc_matrix((data, indices, indptr), shape=(size, size))
 
     def _finish(self, x):
         s, h = self.sys, self.h
