@@ -32,6 +32,7 @@ h → 0 (Bottasso, Bauchau & Cardona 2007).
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass
 from typing import Any
 
@@ -41,7 +42,7 @@ from numpy.typing import NDArray
 
 from solver.jit import njit
 from solver.newton import LinearSolver, max_abs, newton
-from solver.system import BLOCKS, System
+from solver.system import BLOCKS, System, _scatter_add
 
 Array = NDArray[np.float64]
 
@@ -742,18 +743,22 @@ class EnergyDecaying(Integrator):
         xa, xb, dq, _d, qb, qa, qm, mu, _nu, acc = self._unpack(x)
         h2 = h * h
         kept = self._kept_entries
-        parts: list[tuple[Array, Array, Array]] = []
+        first = self._scatter is None  # the pattern is the same at every call: built once
+        parts: list[tuple[float, Array]] = []  # (weight, values) of each part
+        where: list[tuple[Array, Array]] = []  # (rows, columns) of each part, first call only
+
+        def part(w: float, vals: Array, rows: Array, cols: Array) -> None:
+            parts.append((w, vals))
+            if first:
+                where.append((rows, cols))
 
         def put(name: str, vals: Array, places) -> None:
             """Add block ``name`` with ``vals`` at (row offset, column offset, weight) places;
             in the stage-a rows (offset 0) the massless unknowns' rows are left out."""
             rows, cols = s.block_pattern(name)
             for r0, c0, w in places:
-                if r0 == 0:
-                    parts.append((rows[kept[name]], cols[kept[name]] + c0,
-                                  w * vals[kept[name]]))
-                else:
-                    parts.append((rows + r0, cols + c0, w * vals))
+                k = kept[name] if r0 == 0 else slice(None)
+                part(w, vals[k], rows[k] + r0, cols[k] + c0)
 
         # ∂∇̄V/∂x_a = ∂∇̄V/∂x_b = ½ ∂∇̄V/∂q_b; q_a = q_i − (x_b − x_a)/6, q_b = q_i + (x_a + x_b)/2
         put("M", s.M_vals, [(0, 0, 3.0), (0, n, 1.0), (n, 0, -3.0), (n, n, 1.0)])
@@ -783,30 +788,37 @@ class EnergyDecaying(Integrator):
             gbar = s.discrete_jacobian_values(self.q, qb, self.t, self._tf)
             g_rows, g_cols = s.block_pattern("G")
             k = kept["GT"]  # Ḡᵀμ in both stages' rows
-            parts += [(g_cols[k], g_rows[k] + 2 * n, gbar[k]), (g_cols + n, g_rows + 2 * n, gbar)]
+            part(1.0, gbar[k], g_cols[k], g_rows[k] + 2 * n)
+            part(1.0, gbar, g_cols + n, g_rows + 2 * n)
             put("G", s.jacobian_values(qb, self._tf), [(2 * n, 0, 0.5), (2 * n, n, 0.5)])
         if s.mn:
             am = s.nonholonomic_values(qm)
             a_rows, a_cols = s.block_pattern("A")
             k = kept["AT"]
-            parts += [(a_cols[k], a_rows[k] + 2 * n + mh, am[k]),
-                      (a_cols + n, a_rows + 2 * n + mh, am)]
+            part(1.0, am[k], a_cols[k], a_rows[k] + 2 * n + mh)
+            part(1.0, am, a_cols + n, a_rows + 2 * n + mh)
             o = 2 * n + mh
             put("A", am, [(o, 0, 0.5), (o, n, 0.5)])
             put("A", s.nonholonomic_derivative(qm, dq), [(o, 0, 0.25), (o, n, 0.25)])
         w = self._massless  # their stage-a rows: x_b − x_a = 0
         ones = np.ones(len(w))
-        parts += [(w, w, -ones), (w, w + n, ones)]
+        part(-1.0, ones, w, w)
+        part(1.0, ones, w, w + n)
         size = 2 * n + mh + s.mn
-        vals = np.concatenate([v for _, _, v in parts])
-        if self._scatter is None:  # the pattern is the same at every call: sort it once
-            rows = np.concatenate([r for r, _, _ in parts])
-            cols = np.concatenate([c for _, c, _ in parts])
+        if first:
+            rows = np.concatenate([r for r, _ in where])
+            cols = np.concatenate([c for _, c in where])
             uniq, inv = np.unique(cols * size + rows, return_inverse=True)
-            self._scatter = (inv, (uniq % size).astype(np.int32),
+            bounds = np.cumsum([0] + [len(r) for r, _ in where])
+            self._scatter = ([inv[a:b] for a, b in itertools.pairwise(bounds)],
+                             (uniq % size).astype(np.int32),
                              np.searchsorted(uniq // size, np.arange(size + 1)).astype(np.int32))
-        inv, indices, indptr = self._scatter
-        data = np.bincount(inv, vals, minlength=len(indices))
+        places, indices, indptr = self._scatter
+        # each part added in place where its entries go (no triplet list of the rotor's
+        # million entries, no sort): the sums of np.bincount over them, in the same order
+        data = np.zeros(len(indices))
+        for idx, (wt, vals) in zip(places, parts, strict=True):
+            _scatter_add(data, idx, np.ascontiguousarray(vals, dtype=float), wt)
         # one pattern at every call, whatever values come out zero: the LU refactors with the
         # pivot order of the first matrix only while the pattern stays (dropping the zeros
         # gave a new pattern, and a fresh SuperLU factorization, at every step of the rotor)

@@ -56,10 +56,10 @@ def _scatter_product(out_idx, in_idx, in_shift, vals, x, size):
 
 
 @njit(cache=True)
-def _scatter_add(out, idx, vals):
-    """out[idx[e]] += vals[e] for every e, in order."""
+def _scatter_add(out, idx, vals, weight=1.0):
+    """out[idx[e]] += weight * vals[e] for every e, in order."""
     for e in range(len(vals)):
-        out[idx[e]] += vals[e]
+        out[idx[e]] += weight * vals[e]
 
 
 class System:
