@@ -229,6 +229,20 @@ def scheduler():
         yield cluster.scheduler_address
 
 
+def test_local_cluster_workers_start_with_the_solvers_malloc_thresholds(monkeypatch):
+    """The local cluster's workers start with glibc malloc thresholds that keep the solver's
+    per-step arrays in the heap, not dask's MALLOC_TRIM_THRESHOLD_ = 65536 (which made a
+    rotor revolution 9.0 s instead of 4.7 s, measured; see ``pipelines.sweep``)."""
+    from pipelines.sweep import MALLOC_ENVIRON, _connect
+
+    for key in MALLOC_ENVIRON:  # a variable already set (here or by an earlier cluster) wins
+        monkeypatch.setenv(key, "0")
+        monkeypatch.delenv(key)
+    with _connect(1, None) as client:
+        seen = client.run(lambda: {k: os.environ.get(k) for k in MALLOC_ENVIRON})
+    assert list(seen.values()) == [{k: str(v) for k, v in MALLOC_ENVIRON.items()}]
+
+
 SWEEP_STUDY = """
 [fixed]
 hub_speed = 27.0
