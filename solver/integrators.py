@@ -747,10 +747,12 @@ class EnergyDecaying(Integrator):
         parts: list[tuple[float, Array]] = []  # (weight, values) of each part
         where: list[tuple[Array, Array]] = []  # (rows, columns) of each part, first call only
 
-        def part(w: float, vals: Array, rows: Array, cols: Array) -> None:
+        def part(w: float, vals: Array, rows: Array, cols: Array, r0: int, c0: int) -> None:
+            """Add ``w * vals`` at (rows + r0, cols + c0); the indices only at the first call
+            (the pattern is kept: the later calls need the values alone)."""
             parts.append((w, vals))
             if first:
-                where.append((rows, cols))
+                where.append((rows + r0, cols + c0))
 
         def put(name: str, vals: Array, places) -> None:
             """Add block ``name`` with ``vals`` at (row offset, column offset, weight) places;
@@ -758,7 +760,7 @@ class EnergyDecaying(Integrator):
             rows, cols = s.block_pattern(name)
             for r0, c0, w in places:
                 k = kept[name] if r0 == 0 else slice(None)
-                part(w, vals[k], rows[k] + r0, cols[k] + c0)
+                part(w, vals[k], rows[k], cols[k], r0, c0)
 
         # ∂∇̄V/∂x_a = ∂∇̄V/∂x_b = ½ ∂∇̄V/∂q_b; q_a = q_i − (x_b − x_a)/6, q_b = q_i + (x_a + x_b)/2
         put("M", s.M_vals, [(0, 0, 3.0), (0, n, 1.0), (n, 0, -3.0), (n, n, 1.0)])
@@ -788,22 +790,22 @@ class EnergyDecaying(Integrator):
             gbar = s.discrete_jacobian_values(self.q, qb, self.t, self._tf)
             g_rows, g_cols = s.block_pattern("G")
             k = kept["GT"]  # Ḡᵀμ in both stages' rows
-            part(1.0, gbar[k], g_cols[k], g_rows[k] + 2 * n)
-            part(1.0, gbar, g_cols + n, g_rows + 2 * n)
+            part(1.0, gbar[k], g_cols[k], g_rows[k], 0, 2 * n)
+            part(1.0, gbar, g_cols, g_rows, n, 2 * n)
             put("G", s.jacobian_values(qb, self._tf), [(2 * n, 0, 0.5), (2 * n, n, 0.5)])
         if s.mn:
             am = s.nonholonomic_values(qm)
             a_rows, a_cols = s.block_pattern("A")
             k = kept["AT"]
-            part(1.0, am[k], a_cols[k], a_rows[k] + 2 * n + mh)
-            part(1.0, am, a_cols + n, a_rows + 2 * n + mh)
+            part(1.0, am[k], a_cols[k], a_rows[k], 0, 2 * n + mh)
+            part(1.0, am, a_cols, a_rows, n, 2 * n + mh)
             o = 2 * n + mh
             put("A", am, [(o, 0, 0.5), (o, n, 0.5)])
             put("A", s.nonholonomic_derivative(qm, dq), [(o, 0, 0.25), (o, n, 0.25)])
         w = self._massless  # their stage-a rows: x_b − x_a = 0
         ones = np.ones(len(w))
-        part(-1.0, ones, w, w)
-        part(1.0, ones, w, w + n)
+        part(-1.0, ones, w, w, 0, 0)
+        part(1.0, ones, w, w, 0, n)
         size = 2 * n + mh + s.mn
         if first:
             rows = np.concatenate([r for r, _ in where])

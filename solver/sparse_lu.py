@@ -278,7 +278,8 @@ def _dense_lines(a: sp.csc_matrix) -> IntArray:
     return np.nonzero(counts > limit)[0]
 
 
-def _splu_order(a: sp.csc_matrix, spec: str) -> tuple[IntArray, IntArray]:
+def _splu_order(a: sp.csc_matrix, spec: str,
+                dense: IntArray | None = None) -> tuple[IntArray, IntArray]:
     """SuperLU's (perm_r, perm_c) for ``a`` in the column order ``spec``: one of SuperLU's
     orderings, or ``DENSE_LAST + <one of them>``: that ordering of the matrix without its
     dense lines (:func:`_dense_lines`), and those last. Minimum degree on the whole matrix
@@ -286,13 +287,14 @@ def _splu_order(a: sp.csc_matrix, spec: str) -> tuple[IntArray, IntArray]:
     rest poorly: on the rotor's Newton matrix, minimum degree on AᵀA without the 8 inflow
     lines and those last costs 2.8 million multiply-adds per refactorization against 4.7 to
     9.3 million for the three orderings on the whole matrix. Raises RuntimeError (or
-    ``MatrixRankWarning``) where SuperLU finds a matrix singular."""
+    ``MatrixRankWarning``) where SuperLU finds a matrix singular. ``dense``: the dense
+    lines, if the caller has them already."""
     with warnings.catch_warnings():
         warnings.simplefilter("error", spla.MatrixRankWarning)
         if not spec.startswith(DENSE_LAST):
             lu = spla.splu(a, permc_spec=spec)
             return lu.perm_r.astype(np.int64), lu.perm_c.astype(np.int64)
-        dense = _dense_lines(a)
+        dense = _dense_lines(a) if dense is None else dense
         rest = np.setdiff1d(np.arange(a.shape[0]), dense)
         sub = spla.splu(a[rest][:, rest].tocsc(), permc_spec=spec[len(DENSE_LAST):])
         cols = np.concatenate([rest[np.argsort(sub.perm_c)], dense])  # new column k: cols[k]
@@ -307,11 +309,13 @@ def _fresh_analysis(a: sp.csc_matrix, spec: str | None = None) -> _Analysis:
     cheapest to refactor of COLAMD and minimum degree on AᵀA + A and on AᵀA, on the whole
     matrix and, where it has dense lines, with those last (all tried from ``ORDERINGS_FROM``
     unknowns up; see :func:`_splu_order`)."""
+    dense = None
     if spec is not None:
         specs: tuple[str, ...] = (spec,)
     elif a.shape[0] >= ORDERINGS_FROM:
         specs = ("COLAMD", "MMD_AT_PLUS_A", "MMD_ATA")
-        if len(_dense_lines(a)):
+        dense = _dense_lines(a)
+        if len(dense):
             specs += tuple(DENSE_LAST + s for s in specs)
     else:
         specs = ("COLAMD",)
@@ -319,7 +323,7 @@ def _fresh_analysis(a: sp.csc_matrix, spec: str | None = None) -> _Analysis:
     failure: Exception | None = None
     for spec in specs:
         try:
-            perm_r, perm_c = _splu_order(a, spec)
+            perm_r, perm_c = _splu_order(a, spec, dense)
         except (RuntimeError, spla.MatrixRankWarning) as exc:
             # the whole matrix singular, or only the part without the dense lines (which
             # may need them for its rank): try the next ordering
