@@ -112,14 +112,13 @@ def test_earlier_pivot_order_is_tried_before_superlu():
     assert (lu.fresh, lu.refactored) == (2, 4)
 
 
-
 def test_dense_lines_are_ordered_last():
     """The rotor's Newton matrix has 8 dense rows and columns (the global inflow states: every
     blade section's load feeds them, each acts on every section): minimum degree on the
     whole matrix sees the unknowns they touch as adjacent and orders the rest poorly. The
     ordering of the rest without them, and those last, is chosen, and costs 2.8 million
     multiply-adds per refactorization against 4.7 million for the best of the three orderings
-    on the whole matrix (measured); it solves to roundoff."""
+    on the whole matrix (measured); it solves as accurately as they do."""
     import studies.rotor as rotor
     from solver.system import System
 
@@ -139,5 +138,7 @@ def test_dense_lines_are_ordered_last():
     lu.factor(a)
     b = np.random.default_rng(1).standard_normal(a.shape[0])
     x = lu.solve(b)
-    # relative to the matrix's largest entry times |x| (entries from 1e-3 to 1e4): measured
-    assert np.abs(a @ x - b).max() <= 1e-12 * abs(a).max() * np.abs(x).max()
+    # componentwise backward error max |Ax − b| / (|A||x| + |b|): measured 4.4e-13, like the
+    # whole-matrix orderings' 3.8e-13 – 6.4e-13 (the 0.001 pivot threshold allows some growth)
+    berr = np.abs(a @ x - b) / (abs(a) @ np.abs(x) + np.abs(b))
+    assert berr.max() <= 1e-11, berr.max()
