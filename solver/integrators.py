@@ -32,7 +32,6 @@ h → 0 (Bottasso, Bauchau & Cardona 2007).
 
 from __future__ import annotations
 
-import itertools
 from dataclasses import dataclass
 from typing import Any
 
@@ -42,7 +41,7 @@ from numpy.typing import NDArray
 
 from solver.jit import njit
 from solver.newton import LinearSolver, max_abs, newton
-from solver.system import BLOCKS, System, _scatter_add
+from solver.system import BLOCKS, System, _scatter_add, csc_pattern
 
 Array = NDArray[np.float64]
 
@@ -808,13 +807,7 @@ class EnergyDecaying(Integrator):
         part(1.0, ones, w, w, 0, n)
         size = 2 * n + mh + s.mn
         if first:
-            rows = np.concatenate([r for r, _ in where])
-            cols = np.concatenate([c for _, c in where])
-            uniq, inv = np.unique(cols * size + rows, return_inverse=True)
-            bounds = np.cumsum([0] + [len(r) for r, _ in where])
-            self._scatter = ([inv[a:b] for a, b in itertools.pairwise(bounds)],
-                             (uniq % size).astype(np.int32),
-                             np.searchsorted(uniq // size, np.arange(size + 1)).astype(np.int32))
+            self._scatter = csc_pattern([r for r, _ in where], [c for _, c in where], size)
         places, indices, indptr = self._scatter
         # each part added in place where its entries go (no triplet list of the rotor's
         # million entries, no sort): the sums of np.bincount over them, in the same order

@@ -14,6 +14,8 @@ the block values with one ``np.bincount``. The model is read, never written.
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
@@ -53,6 +55,22 @@ def _scatter_product(out_idx, in_idx, in_shift, vals, x, size):
     for e in range(len(vals)):
         out[out_idx[e]] += vals[e] * x[in_idx[e] - in_shift]
     return out
+
+
+def csc_pattern(rows: list[NDArray], cols: list[NDArray], size: int) -> tuple[list, NDArray,
+                                                                          NDArray]:
+    """The CSC pattern of a size × size matrix summed from parts, part k having entries at
+    (rows[k], cols[k]) (repeated places add up): for each part the index of each of its
+    entries among the pattern's nonzeros (for :func:`_scatter_add`), and the pattern's
+    ``indices`` and ``indptr`` (int32)."""
+    # column-major order for CSC (int64: a part left empty may come as a float array)
+    key = (np.concatenate(cols).astype(np.int64) * size
+           + np.concatenate(rows).astype(np.int64))
+    uniq, inv = np.unique(key, return_inverse=True)
+    bounds = np.cumsum([0] + [len(r) for r in rows])
+    places = [inv[a:b] for a, b in itertools.pairwise(bounds)]
+    return (places, (uniq % size).astype(np.int32),
+            np.searchsorted(uniq // size, np.arange(size + 1)).astype(np.int32))
 
 
 @njit(cache=True)
@@ -223,17 +241,12 @@ class System:
         }
         self.block_sizes = {k: len(r) for k, (r, _) in pattern.items()}
         self._patterns = pattern
-        rows = cat([pattern[k][0] for k in BLOCKS])
-        cols = cat([pattern[k][1] for k in BLOCKS])
         N = n + self.m
-        key = cols * N + rows  # column-major order for CSC
-        uniq, inv = np.unique(key, return_inverse=True)
-        bounds = np.cumsum([0] + [self.block_sizes[k] for k in BLOCKS])
-        self._scatter_of = {k: inv[bounds[i] : bounds[i + 1]] for i, k in enumerate(BLOCKS)}
+        places, self._indices, self._indptr = csc_pattern(
+            [pattern[k][0] for k in BLOCKS], [pattern[k][1] for k in BLOCKS], N)
+        self._scatter_of = dict(zip(BLOCKS, places, strict=True))
         self._shared_kkt: sp.csc_matrix | None = None
-        self._nnz = len(uniq)
-        self._indices = (uniq % N).astype(np.int32)
-        self._indptr = np.searchsorted(uniq // N, np.arange(N + 1)).astype(np.int32)
+        self._nnz = len(self._indices)
         self.N = N
 
     def kkt(self, blocks: dict[str, Array], shared: bool = False) -> sp.csc_matrix:
