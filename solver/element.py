@@ -20,7 +20,9 @@ defaults to nothing, so a set implements only its own physics):
   accelerations a = q̈, takes ``a`` as a fourth argument of :meth:`~ElementSet.force` and
   :meth:`~ElementSet.force_jacobians`, and gives ∂f/∂a at ``(fa_rows, fa_cols)`` from
   :meth:`~ElementSet.acceleration_jacobian`; every scheme passes the acceleration of its own
-  kinematics (``ep``: (v_f − v_i)/h, ``galpha``: q̈_{n+1});
+  kinematics (``ep``: (v_f − v_i)/h, ``galpha``: q̈_{n+1}); a set may also give the three
+  Jacobians already weighted and summed, :meth:`~ElementSet.force_tangent` (the Newton matrix
+  needs only their sum);
 * **holonomic rows** C(q, t) = 0 (``n_holonomic``): values and Jacobian at the flat pattern
   ``(hol_rows, hol_cols)`` (local rows), the exact discrete derivative Ḡ with
   Ḡ·(q_f − q_i) = C_f − C_i, the λ-weighted Hessian at ``(hess_rows, hess_cols)``, ∂C/∂t and
@@ -166,6 +168,15 @@ class ElementSet:
     def acceleration_jacobian(self, q: Array, v: Array, t: float, a: Array) -> Array:
         """∂f/∂a at ``(fa_rows, fa_cols)`` (sets with ``uses_acceleration``)."""
         return EMPTY_F
+
+    def force_tangent(self, q: Array, v: Array, t: float, a: Array | None, wq: float,
+                      wv: Array, wa: float) -> Array | None:
+        """wq ∂f/∂q + (∂f/∂v) diag(wv) + wa ∂f/∂a summed at ``(fq_rows, fq_cols)``, for a set
+        whose ∂f/∂v and ∂f/∂a patterns lie inside its ∂f/∂q pattern and that can sum them
+        before mapping them to global coordinates (cheaper than three global blocks); ``wv``
+        is the weight of each global unknown's velocity column (length n). None (the
+        default) when the set cannot: the three Jacobians are then summed globally."""
+        return None
 
     # -- holonomic rows -------------------------------------------------------------------
     def constraint(self, q: Array, t: float) -> tuple[Array, Array]:

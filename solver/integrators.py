@@ -176,7 +176,7 @@ class Integrator:
 
     def __init__(self, system: System, h: float, t0: float = 0.0, q0: Array | None = None,
                  v0: Array | None = None, reuse_jacobian: bool = True,
-                 tol: float = CONSTRAINT_TOL) -> None:
+                 tol: float = CONSTRAINT_TOL, book_work: bool = True) -> None:
         if not (np.isfinite(h) and h > 0):
             raise ValueError(f"time step h = {h!r} s must be > 0")
         if not (0 < tol < 1e-3):
@@ -203,7 +203,11 @@ class Integrator:
             self.v[self.first] = self._qdd0[self.first]  # ẋ from A ẋ = f
         except ValueError:
             pass
-        self.work = 0.0
+        # the work of loads, dampers and drivers (J), for energy balances; a run that reads
+        # none (the rotor's) saves the midpoint force evaluation that ep and galpha spend on
+        # it every step, and its work is NaN (never a silently wrong number)
+        self.book_work = bool(book_work)
+        self.work = 0.0 if book_work else float("nan")
         self.energy0 = self.energy()
         self.n_steps = 0
         self.n_iterations = 0
@@ -318,23 +322,22 @@ class Integrator:
     def _tangent(self, w: Tangent) -> sp.csc_matrix:
         """The Newton matrix from a scheme's weights (one assembly for every scheme)."""
         s = self.sys
-        blocks = {"M": w.mass * s.M_vals, "A1": w.first * s.A1_vals}
+        blocks = {"M": (w.mass, s.M_vals), "A1": (w.first, s.A1_vals)}
         if s.block_sizes["K"]:
-            blocks["K"] = w.stiff * (s.stiffness_values(w.q) if w.k_vals is None else w.k_vals)
-        if s.block_sizes["Dq"] or s.block_sizes["Dv"]:
-            jq, jv = s.applied_jacobians(w.q, w.v, w.t, w.acc)
-            blocks["Dq"] = -w.force * w.dq_dx * jq
-            blocks["Dv"] = -w.force * jv * w.dv_dx[s.Dv_cols]
-        if s.block_sizes["Da"]:
-            blocks["Da"] = -w.force * w.da_dx * s.acceleration_jacobian(w.q, w.v, w.t, w.acc)
+            blocks["K"] = (w.stiff,
+                           s.stiffness_values(w.q) if w.k_vals is None else w.k_vals)
         if s.block_sizes["H"]:
-            blocks["H"] = w.hess * s.hessian_values(w.q, w.t, w.mu)
+            blocks["H"] = (w.hess, s.hessian_values(w.q, w.t, w.mu))
         blocks["GT"], blocks["G"] = w.gbar, w.g_rows
         if s.mn:
             a = s.nonholonomic_values(w.q)
             blocks["AT"] = a
             blocks["A"] = a + w.a_weight * s.nonholonomic_derivative(w.q, w.w)
-        return s.kkt(blocks, shared=True)  # only factored, never kept
+        forces = None
+        if s.block_sizes["Dq"] or s.block_sizes["Dv"] or s.block_sizes["Da"]:
+            forces = (w.q, w.v, w.t, w.acc, -w.force * w.dq_dx, -w.force * w.dv_dx,
+                      -w.force * w.da_dx)
+        return s.kkt(blocks, shared=True, forces=forces)  # only factored, never kept
 
     def _culprit(self, res) -> str:
         """Which element owns the largest residual of a failed Newton iteration."""
@@ -429,7 +432,7 @@ class EnergyPreserving(Integrator):
         gbar = s.discrete_jacobian_values(qi, qf, self.t, self._tf)
         r1 = s.mass_mul(dq) - self._hMv
         if len(self.first):
-            r1 += (self.alpha * h) * (s.A1 @ dq)
+            r1 += (self.alpha * h) * s.first_mass_mul(dq)
         load = s.discrete_gradient(qi, qf)
         if s.force_sets:  # else f = 0, and ∇̄V − 0 is ∇̄V to the bit
             load = load - s.applied(qm, dq / h, self._tm, self._acc(dq))
@@ -458,9 +461,10 @@ class EnergyPreserving(Integrator):
         vi = self.v
         vf = vi + (dq / h - vi) / self.alpha
         vf[self.first] = dq[self.first] / h  # the mean rate of the midpoint rule
-        gbar = s.discrete_jacobian_values(self.q, qf, self.t, self._tf)
         lam = mu / c
-        self._book_work(lam, gbar, dq, s.applied(qm, dq / h, self._tm, self._acc(dq)))
+        if self.book_work:
+            gbar = s.discrete_jacobian_values(self.q, qf, self.t, self._tf)
+            self._book_work(lam, gbar, dq, s.applied(qm, dq / h, self._tm, self._acc(dq)))
         self.q, self.v, self.t, self.lam, self.nu = qf, vf, self._tf, lam, nu / c
 
 
@@ -544,7 +548,7 @@ class GeneralizedAlpha(Integrator):
         if len(self.first):
             rate = np.zeros(s.n)
             rate[self.first] = vf[self.first]
-            r1 += sc * (s.A1 @ rate)
+            r1 += sc * s.first_mass_mul(rate)
         load = s.gradient(qf)
         if s.force_sets:  # else f = 0, and ∇V − 0 is ∇V to the bit
             load = load - s.applied(qf, vf, self._tf, self._acc(anew))
@@ -583,7 +587,7 @@ class GeneralizedAlpha(Integrator):
             anew[f] = (dq[f] - h * (1 - self.gamma1) * ai[f]) / (self.gamma1 * h)  # w_f
             qdd[f] = vf[f]
         lam, nuv = mu / self._sc, nu / self._sc
-        if not self.conservative:  # no loads, dampers or drivers: no work to book
+        if self.book_work and not self.conservative:  # else no work to book
             qm, vm = self.q + 0.5 * dq, 0.5 * (self.v + vf)
             gm = s.jacobian_values(qm, self.t + 0.5 * h)
             # work booked with midpoint values (the scheme has no exact discrete energy balance)
@@ -714,8 +718,8 @@ class EnergyDecaying(Integrator):
         ra = s.mass_mul(3.0 * xa + xb) - 4.0 * self._Mhv - h2 * (fa - g + 0.5 * kd + kdd / 6.0) + cf
         rb = s.mass_mul(xb - 3.0 * xa) + 2.0 * self._Mhv - h2 * (fb - g - 0.5 * kd) + cf
         if len(self.first):
-            ra += h * (s.A1 @ xa)
-            rb += h * (s.A1 @ xb)
+            ra += h * s.first_mass_mul(xa)
+            rb += h * s.first_mass_mul(xb)
         parts = [ra, rb, s.constraint(qb, self._tf)]
         if s.mn:
             am = s.nonholonomic_values(qm)

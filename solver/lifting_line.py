@@ -434,6 +434,21 @@ class LiftingLineSet(ElementSet):
         jac = self._local_jacobian(q, v, a)
         return self._expand(jac, 24 + self.n + self.n_i, 0).ravel()
 
+    def force_tangent(self, q, v, t, a, wq, wv, wa):
+        # the section's 12 inputs are S times its support's coordinates, S times their rates
+        # and S times their accelerations: with one velocity weight per section the three
+        # local Jacobians sum before the map to the 48 support columns, and ∂f/∂v, ∂f/∂a
+        # (inside the ∂f/∂q pattern) cost no global blocks of their own
+        w48 = wv[self.idx48]
+        wk = w48[:, 0]
+        if not np.all(w48 == wk[:, None]):
+            return None
+        jac = self._local_jacobian(q, v, a)
+        m = 12 + self.n + self.n_i  # columns by x, μ, α; then by ẋ (12) and ẍ (12)
+        tan = wq * jac[:, :, :m]
+        tan[:, :, :12] += wk[:, None, None] * jac[:, :, m : m + 12] + wa * jac[:, :, m + 12 :]
+        return self._expand(tan, 0, self.n + self.n_i).ravel()
+
     # ------------------------------------------------------------------ outputs
     def airloads(self, q: Array, v: Array, a: Array) -> dict[str, Array]:
         """Per section: ``force`` (N/m, global, total), ``circulatory`` (N/m), ``lift``

@@ -245,24 +245,40 @@ class System:
         places, self._indices, self._indptr = csc_pattern(
             [pattern[k][0] for k in BLOCKS], [pattern[k][1] for k in BLOCKS], N)
         self._scatter_of = dict(zip(BLOCKS, places, strict=True))
+        # where each force set's entries of the Dq, Dv and Da blocks go among the nonzeros
+        self._force_places = {}
+        oq = ov = oa = 0
+        for st in dict.fromkeys(self.fjac_sets + self.accel_sets):
+            nq, nv = (len(st.fq_rows), len(st.fv_rows)) if st in self.fjac_sets else (0, 0)
+            na = len(st.fa_rows) if st in self.accel_sets else 0
+            self._force_places[st] = (places[BLOCKS.index("Dq")][oq : oq + nq],
+                                      places[BLOCKS.index("Dv")][ov : ov + nv],
+                                      places[BLOCKS.index("Da")][oa : oa + na])
+            oq, ov, oa = oq + nq, ov + nv, oa + na
         self._shared_kkt: sp.csc_matrix | None = None
         self._nnz = len(self._indices)
         self.N = N
 
-    def kkt(self, blocks: dict[str, Array], shared: bool = False) -> sp.csc_matrix:
-        """The Newton matrix from block values (pattern order of each named block; a block
-        left out is zero). With ``shared``, the values are written into one matrix kept by the
-        system and that matrix is returned: valid until the next shared call, for a caller that
-        only factors it (it saves the sparse constructor's checks, about a tenth of a hub
-        case's Newton matrix time)."""
+    def kkt(self, blocks: dict[str, Array | tuple[float, Array]], shared: bool = False,
+            forces: tuple | None = None) -> sp.csc_matrix:
+        """The Newton matrix from block values (pattern order of each named block, or a pair
+        (weight, values); a block left out is zero) and, with ``forces`` = (q, v, t, a, wq,
+        wv, wa), the force Jacobians weighted as :meth:`add_force_tangent` sums them. With
+        ``shared``, the values are written into one matrix kept by the system and that matrix
+        is returned: valid until the next shared call, for a caller that only factors it (it
+        saves the sparse constructor's checks, about a tenth of a hub case's Newton matrix
+        time)."""
         vals = np.zeros(self._nnz)
         # each block added where its entries go, in pattern order (np.bincount's order over
-        # the blocks laid end to end: the same bits, without the concatenation and the
-        # bincount's passes over the rotor's 610 000 block entries)
+        # the blocks laid end to end, without the concatenation and the bincount's passes
+        # over the rotor's block entries)
         for k in BLOCKS:
             if k in blocks and self.block_sizes[k]:
-                _scatter_add(vals, self._scatter_of[k],
-                             np.ascontiguousarray(blocks[k], dtype=float))
+                w, b = blocks[k] if isinstance(blocks[k], tuple) else (1.0, blocks[k])
+                _scatter_add(vals, self._scatter_of[k], np.ascontiguousarray(b, dtype=float),
+                             w)
+        if forces is not None:
+            self.add_force_tangent(vals, *forces)
         if not shared:
             return sp.csc_matrix((vals, self._indices, self._indptr), shape=(self.N, self.N))
         if self._shared_kkt is None:
@@ -277,6 +293,11 @@ class System:
         """M v (M the second-order mass matrix)."""
         m = self.M
         return _csr_matvec(m.indptr, m.indices, m.data, np.ascontiguousarray(v, dtype=float))
+
+    def first_mass_mul(self, x: Array) -> Array:
+        """A x (A the first-order states' mass matrix, A ẋ = f)."""
+        m = self.A1
+        return _csr_matvec(m.indptr, m.indices, m.data, np.ascontiguousarray(x, dtype=float))
 
     def kinetic(self, v: Array) -> float:
         return 0.5 * float(v @ self.mass_mul(v))
@@ -363,6 +384,29 @@ class System:
             jq.append(x)
             jv.append(y)
         return _cat(jq, float), _cat(jv, float)
+
+    def add_force_tangent(self, vals: Array, q: Array, v: Array, t: float, a: Array | None,
+                          wq: float, wv: Array, wa: float) -> None:
+        """Add wq ∂f/∂q + (∂f/∂v) diag(wv) + wa ∂f/∂a to ``vals``, the Newton matrix's values in
+        pattern order (``wv``: one weight per velocity, length n). Each set's part goes
+        straight where its entries go; a set that sums its three Jacobians itself
+        (:meth:`~solver.element.ElementSet.force_tangent`: the lifting lines, whose ∂f/∂v and
+        ∂f/∂a would otherwise be mapped to 48 global columns per section twice more) gives
+        one part."""
+        a = self._acc(a)
+        for st, (pq, pv, pa) in self._force_places.items():
+            acc = st.uses_acceleration
+            tan = st.force_tangent(q, v, t, a, wq, wv, wa)
+            if tan is not None:
+                _scatter_add(vals, pq, tan)
+                continue
+            if len(pq) or len(pv):
+                jq, jv = st.force_jacobians(q, v, t, a) if acc else st.force_jacobians(q, v, t)
+                _scatter_add(vals, pq, jq, wq)
+                if len(pv):
+                    _scatter_add(vals, pv, jv * wv[st.fv_cols])
+            if len(pa):
+                _scatter_add(vals, pa, st.acceleration_jacobian(q, v, t, a), wa)
 
     def acceleration_jacobian(self, q: Array, v: Array, t: float,
                               a: Array | None = None) -> Array:

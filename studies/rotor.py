@@ -442,10 +442,14 @@ class _Sampler:
                          *np.degrees(phis)])
 
 
-def integrator(system: System, p: dict[str, Any], h: float) -> Integrator:
-    """The time integrator ``p`` asks for, with step ``h`` (s); ρ∞ applies to ``galpha``."""
+def integrator(system: System, p: dict[str, Any], h: float,
+               book_work: bool = False) -> Integrator:
+    """The time integrator ``p`` asks for, with step ``h`` (s); ρ∞ applies to ``galpha``.
+    The work of the loads is booked only with ``book_work`` (an energy check): a case reads
+    none, and booking it costs a force evaluation per step."""
     rho = p["rho_inf"] if p["scheme"] == "galpha" else None
-    return make_integrator(system, p["scheme"], h, rho_inf=rho, tol=NEWTON_TOL)
+    return make_integrator(system, p["scheme"], h, rho_inf=rho, tol=NEWTON_TOL,
+                           book_work=book_work)
 
 
 def _settle(p: dict[str, Any], h: float) -> tuple[dict[str, Any], int, int]:

@@ -170,7 +170,8 @@ def test_full_rotor_runs_with_ed_and_balances_its_energy():
 
     p = SPEC.complete({"scheme": "ed"})
     system = System(build(p)[0])
-    integ = integrator(system, p, 2 * np.pi / p["hub_speed"] / p["steps_per_rev"])
+    integ = integrator(system, p, 2 * np.pi / p["hub_speed"] / p["steps_per_rev"],
+                       book_work=True)
     e0, d_prev, worst = integ.energy(), 0.0, 0.0
     for _ in range(p["steps_per_rev"]):
         info = integ.step()
