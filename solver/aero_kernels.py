@@ -197,7 +197,8 @@ def airloads(x, xd, xa, mu, al, phi, wts, props, rho, vinf, omega_r, load_scale,
 def local_jacobian(x, xd, xa, mu, al, phi, wts, phi_p, wts_p, props, rho, vinf, omega_r,
                    load_scale, u_floor2, kappa, pb, ainv_c, h, jac):
     """∂(g, rates, forcing)/∂(x, μ, α, ẋ, ẍ) of every section by complex steps i h of
-    :func:`section_loads`, one input at a time.
+    :func:`section_loads`, one input at a time; the inflow states α enter only through the
+    section's λ = Φ·α, so one step along Φ/(Φ·Φ) gives ∂/∂λ, and column j is ∂/∂λ Φ_j.
 
     ``phi_p``, ``wts_p`` (3, K, n_i, complex) are Φ and W at the positions perturbed by i h
     along x, y, z (the only inputs they depend on). ``jac`` (K, 12 + N + n_i, 36 + N + n_i)
@@ -223,11 +224,27 @@ def local_jacobian(x, xd, xa, mu, al, phi, wts, phi_p, wts_p, props, rho, vinf, 
             cmu[i] = mu[k, i]
         for i in range(ni):
             cal[i], cph[i], cwt[i] = al[k, i], phi[k, i], wts[k, i]
+        pp = 0.0
+        for i in range(ni):
+            pp += phi[k, i] * phi[k, i]
         col = 0
         for block in range(5):
-            size = 12 if block in (0, 3, 4) else (n if block == 1 else ni)
-            arr = cx if block == 0 else (cmu if block == 1 else
-                                          (cal if block == 2 else (cxd if block == 3 else cxa)))
+            if block == 2:  # α: one step of λ (no column if Φ = 0 here: λ takes no α)
+                if pp > 0.0:
+                    for i in range(ni):
+                        cal[i] = al[k, i] + step * (phi[k, i] / pp)
+                    section_loads(cx, cxd, cxa, cmu, cal, cph, cwt, props[k], rho, vinf,
+                                  omega_r, load_scale, u_floor2, kappa, pb, ainv_c, wk,
+                                  out[:12], out[12 : 12 + n], out[12 + n :], det)
+                    for i in range(ni):
+                        cal[i] = al[k, i]
+                for c in range(ni):
+                    for i in range(m):
+                        jac[k, i, col] = out[i].imag / h * phi[k, c] if pp > 0.0 else 0.0
+                    col += 1
+                continue
+            size = 12 if block in (0, 3, 4) else n
+            arr = cx if block == 0 else (cmu if block == 1 else (cxd if block == 3 else cxa))
             for c in range(size):
                 base = arr[c]
                 arr[c] = base + step

@@ -252,7 +252,13 @@ class Integrator:
     _full = False
     _stale_failures = 0
     _skip_reuse = 0
-    REUSE_RETRY = 16  # steps after which reusing factors is tried again once it stopped paying
+    # steps after which reusing factors is tried again once it stopped paying, doubled after
+    # every retry that fails again, up to REUSE_RETRY_MAX (a failed retry costs two Newton
+    # iterations: on the rotor, whose blades turn the Newton matrix 1.5° a step, the retries
+    # every 16 steps paid off 2 times in 30)
+    REUSE_RETRY = 16
+    REUSE_RETRY_MAX = 256
+    _retry = REUSE_RETRY
 
     def _reuse_now(self) -> bool:
         """Reuse the previous step's LU factors unless that kept failing lately (fast rotation
@@ -269,10 +275,13 @@ class Integrator:
         if res.stale_refactored:
             self._stale_failures += 1
             if self._stale_failures >= 2:
-                self._skip_reuse = self.REUSE_RETRY
+                self._skip_reuse = self._retry
+                self._retry = min(2 * self._retry, self.REUSE_RETRY_MAX)
                 self._stale_failures = 0
         else:
             self._stale_failures = 0
+            if res.converged and res.factorizations == 0:  # the kept factors paid
+                self._retry = self.REUSE_RETRY
 
     def step(self) -> StepInfo:
         """Advance one step of size h; on failure the state is left unchanged.
