@@ -26,9 +26,9 @@ from studies.rotor import SPEC, build, integrator, run
 
 def per_revolution(p: dict, revolutions: int, profile: bool) -> dict:
     t0 = time.perf_counter()
-    model, _ = build(p)
+    model, parts = build(p)
     system = System(model)
-    integ = integrator(system, p, 2 * np.pi / p["hub_speed"] / p["steps_per_rev"])
+    integ = integrator(system, p, 2 * np.pi / p["hub_speed"] / p["steps_per_rev"], parts)
     setup = time.perf_counter() - t0
     profiler = None
     if profile:

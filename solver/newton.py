@@ -53,11 +53,20 @@ class LinearSolver:
     ``lu`` has ``solve(b)`` after a successful :meth:`factor`, and is None after a failed one.
     Matrices of one sparsity pattern are refactored with the pivot order of the first
     (:class:`solver.sparse_lu.RefactorLU`).
+
+    With ``turning`` (:class:`solver.turning.TurningParts`), factors kept from a matrix
+    factored at an earlier spin angle solve as that matrix turned to the current ``angle``
+    (rad; the caller sets it): T lu⁻¹ Tᵀ b, T turning the spinning parts' 3-vectors in the
+    first ``stages`` blocks of n unknowns.
     """
 
-    def __init__(self) -> None:
+    def __init__(self, turning=None, stages: int = 1) -> None:
         self.lu: RefactorLU | None = None
         self._factors = RefactorLU()
+        self.turning = turning
+        self.stages = stages
+        self.angle = 0.0  # the spin angle of the matrices now being solved
+        self._angle_lu = 0.0  # the spin angle of the factored matrix
 
     def factor(self, mat) -> str | None:
         self.lu = None
@@ -71,7 +80,20 @@ class LinearSolver:
         if d.size and d.min() <= PIVOT_RATIO * d.max():
             return _singular(f"pivot {d.min():.1e} against {d.max():.1e}")
         self.lu = self._factors
+        self._angle_lu = self.angle
         return None
+
+    def solve(self, b: NDArray) -> NDArray:
+        """x with J x = b for the current matrix J, by the kept factors (turned, if they were
+        factored at another spin angle)."""
+        turn = self.angle - self._angle_lu
+        if self.turning is None or turn == 0.0:
+            return self.lu.solve(b)
+        b = np.array(b, dtype=float)
+        self.turning.turn(b, -turn, self.stages)
+        x = self.lu.solve(b)
+        self.turning.turn(x, turn, self.stages)
+        return x
 
 
 def _singular(why: str) -> str:
@@ -105,7 +127,8 @@ def max_abs(x: NDArray) -> float:
 
 def newton(residual: Callable[[NDArray], NDArray], jacobian: Callable[[NDArray], object],
            x0: NDArray, error: Callable[[NDArray], float], tol: float, solver: LinearSolver,
-           reuse: bool = True, full: bool = False, estimate: bool = False) -> NewtonResult:
+           reuse: bool = True, full: bool = False, estimate: bool = False,
+           stale_rate: float = STALE_RATE, stale_iterations: int = 4) -> NewtonResult:
     """Solve residual(x) = 0 from x0.
 
     An update dx has converged when ``error(dx) <= tol``; ``error`` must be a maximum norm
@@ -115,7 +138,9 @@ def newton(residual: Callable[[NDArray], NDArray], jacobian: Callable[[NDArray],
     calls when ``reuse`` is true. ``full`` refactors at every iteration and only gives up on
     non-finite values or the iteration limit (the robust retry). ``estimate`` also accepts an
     update whose error estimate from the contraction rate, rate/(1 − rate)·dx, passes the
-    test (for tolerances well above roundoff, where that estimate means something).
+    test (for tolerances well above roundoff, where that estimate means something). Factors
+    kept from an earlier call are refreshed once the contraction rate exceeds ``stale_rate``
+    or the iteration count reaches ``stale_iterations``.
     """
     x = x0.copy()
     nfact = 0
@@ -137,7 +162,7 @@ def newton(residual: Callable[[NDArray], NDArray], jacobian: Callable[[NDArray],
         if not math.isfinite(max_abs(r)):
             return NewtonResult(x, False, it, nfact, "non-finite residual (Newton diverged)",
                                 residual=r)
-        dx = solver.lu.solve(-r)
+        dx = solver.solve(-r)
         size = max_abs(dx)  # NaN or infinite exactly when an entry is
         if not math.isfinite(size):
             return NewtonResult(x, False, it, nfact, "non-finite Newton update", residual=r)
@@ -161,7 +186,7 @@ def newton(residual: Callable[[NDArray], NDArray], jacobian: Callable[[NDArray],
         # (scipy radau.py's test); it saves the update that would only confirm convergence
         if estimate and 0.0 < rate < ERROR_RATE and err * (rate / (1.0 - rate)) <= tol:
             return NewtonResult(x, True, it, nfact, stale_refactored=stale_bad)
-        if rate > SLOW_RATE or (not fresh and (it >= 4 or rate > STALE_RATE)):
+        if rate > SLOW_RATE or (not fresh and (it >= stale_iterations or rate > stale_rate)):
             stale_bad = stale_bad or (started_stale and not fresh and it <= 2)
             if fresh and rate >= 1.0 and it > 3:
                 return NewtonResult(x, False, it, nfact,

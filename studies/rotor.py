@@ -97,6 +97,7 @@ from solver.sections import isotropic_section
 from solver.symmetry import CyclicSymmetry
 from solver.system import System
 from solver.timefunctions import TimeFunction, linear
+from solver.turning import TurningParts
 from studies import periodic
 from studies.absorbers import N_BIFILARS, AbsorberProbe, add_absorbers, holes_for
 from studies.absorbers import OUTPUTS as ABSORBER_OUTPUTS
@@ -442,14 +443,16 @@ class _Sampler:
                          *np.degrees(phis)])
 
 
-def integrator(system: System, p: dict[str, Any], h: float,
+def integrator(system: System, p: dict[str, Any], h: float, parts: RotorParts | None = None,
                book_work: bool = False) -> Integrator:
     """The time integrator ``p`` asks for, with step ``h`` (s); ρ∞ applies to ``galpha``.
-    The work of the loads is booked only with ``book_work`` (an energy check): a case reads
-    none, and booking it costs a force evaluation per step."""
+    Given the model's ``parts``, the Newton factors kept from step to step turn with the hub
+    and blades (:func:`turning`). The work of the loads is booked only with ``book_work`` (an
+    energy check): a case reads none, and booking it costs a force evaluation per step."""
     rho = p["rho_inf"] if p["scheme"] == "galpha" else None
+    spin = None if parts is None else turning(system, parts, p["hub_speed"])
     return make_integrator(system, p["scheme"], h, rho_inf=rho, tol=NEWTON_TOL,
-                           book_work=book_work)
+                           book_work=book_work, turning=spin)
 
 
 def _settle(p: dict[str, Any], h: float) -> tuple[dict[str, Any], int, int]:
@@ -463,8 +466,8 @@ def _settle(p: dict[str, Any], h: float) -> tuple[dict[str, Any], int, int]:
     steps = iterations = 0
     for rev in range(n):
         factor = big ** (1.0 - rev / n)
-        model, _ = build(p, damping_factor=factor)
-        integ = integrator(System(model), p, h)
+        model, parts = build(p, damping_factor=factor)
+        integ = integrator(System(model), p, h, parts)
         if state is not None:
             integ.restore(state)
         step = stepper(integ, p["hub_speed"])
@@ -495,7 +498,7 @@ def run(params: dict[str, Any]) -> xr.Dataset:
     def start(with_feedback: bool, state: dict[str, Any] | None):
         model, parts = build(p, feedback=with_feedback)
         system = System(model)
-        integ = integrator(system, p, h)
+        integ = integrator(system, p, h, parts)
         if state is not None:  # the same layout: continue exactly
             integ.restore(state)
         return integ, _Sampler(system, parts), parts, system
@@ -591,11 +594,10 @@ def run(params: dict[str, Any]) -> xr.Dataset:
     return ds
 
 
-def symmetry(system: System, parts: RotorParts) -> CyclicSymmetry:
-    """The rotor's quarter-revolution symmetry: the hub turns about the shaft head's axis
-    (tilting with the fuselage-beam), blade j + 1 (its hinge links and airloads) and bifilar
-    j + 1 take the places of blade j and bifilar j; the fuselage-beam, shaft head and inflow
-    are non-rotating (the equivalent's particle too; its rigid mass turns with the hub)."""
+def _spinning(system: System, parts: RotorParts) -> tuple[list[list[Any]], list[Any]]:
+    """The state owners of each sector (blade j: its hinge links, beam and airloads;
+    bifilar j's parts) and the spinning owners in no sector (the hub, the equivalent's
+    rigid mass)."""
     names = {getattr(b.owner, "name", ""): b.owner for b in system.layout.blocks}
     sectors = []
     for j in range(N_BLADES):
@@ -606,7 +608,25 @@ def symmetry(system: System, parts: RotorParts) -> CyclicSymmetry:
     rotating = [parts.hub]
     if isinstance(parts.absorbers, EquivalentParts):
         rotating.append(parts.absorbers.rigid)
+    return sectors, rotating
+
+
+def symmetry(system: System, parts: RotorParts) -> CyclicSymmetry:
+    """The rotor's quarter-revolution symmetry: the hub turns about the shaft head's axis
+    (tilting with the fuselage-beam), blade j + 1 (its hinge links and airloads) and bifilar
+    j + 1 take the places of blade j and bifilar j; the fuselage-beam, shaft head and inflow
+    are non-rotating (the equivalent's particle too; its rigid mass turns with the hub)."""
+    sectors, rotating = _spinning(system, parts)
     return CyclicSymmetry(system, sectors, rotating=rotating, axis=Z, centre=parts.shaft)
+
+
+def turning(system: System, parts: RotorParts, omega: float) -> TurningParts:
+    """The parts that spin at Ω (rad/s) about the shaft axis (those :func:`symmetry` turns
+    and permutes), for Newton factors kept from step to step (:mod:`solver.turning`; the
+    shaft's tilt with the fuselage-beam, a small fraction of a degree, is left out of this
+    approximation of the Newton matrix)."""
+    sectors, rotating = _spinning(system, parts)
+    return TurningParts(system, [o for s in sectors for o in s] + rotating, Z, omega)
 
 
 def _check(p: dict[str, Any]) -> None:

@@ -121,6 +121,39 @@ def test_symmetry_rejects_mismatched_sectors(free_hub):
         CyclicSymmetry(s, [[names["b0_mass"]], [names["b1_slide1.eta"]]])
 
 
+def test_turning_parts_turn_positions_and_directors_only(free_hub):
+    """solver.turning: the spinning owners' position and director 3-vectors turn by R(ψ) about
+    the axis, in every stage block of a Newton vector; scalars (the curve parameters η), the
+    other owners and the multipliers after the stages stay; −ψ undoes ψ."""
+    from solver.turning import TurningParts
+
+    _p, s, _sym = free_hub
+    names = {getattr(b.owner, "name", ""): b.owner for b in s.layout.blocks}
+    owners = [o for n, o in names.items() if n == "hub" or n.startswith("b0_")]
+    axis = np.array([0.2, -0.1, 1.0])
+    parts = TurningParts(s, owners, axis, rate=27.0)
+    eta = s.offset[names["b0_slide1.eta"]]
+    hub = s.offset[names["hub"]]
+    assert eta not in parts.vectors and np.isin(hub + np.arange(12), parts.vectors).all()
+    assert np.all(np.diff(parts.vectors, axis=1) == 1)
+    x = np.random.default_rng(4).standard_normal(2 * s.n + 5)
+    y = x.copy()
+    parts.turn(y, 0.7, stages=2)
+    r = rotation_about(axis, 0.7)
+    for k in (0, s.n):
+        v = parts.vectors + k
+        assert np.abs(y[v] - x[v] @ r.T).max() < 1e-15
+    still = np.ones(len(x), dtype=bool)
+    still[parts.vectors.ravel()] = still[parts.vectors.ravel() + s.n] = False
+    assert np.array_equal(y[still], x[still])
+    parts.turn(y, -0.7, stages=2)
+    assert np.abs(y - x).max() < 1e-15
+    with pytest.raises(ValueError, match="axis"):
+        TurningParts(s, owners, (0.0, 0.0, 0.0), 1.0)
+    with pytest.raises(ValueError, match="declares no state block"):
+        TurningParts(s, [object()], axis, 1.0)
+
+
 def _harmonics(ds, n):
     """Harmonics 0..8 of the last revolution, referred to the azimuth ψ = 0 (a shooting run
     records from a quarter revolution)."""

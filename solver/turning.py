@@ -1,0 +1,79 @@
+"""Newton factors carried along with the parts of a model that spin at a known rate.
+
+The Newton matrix of a spinning part (a rotor's hub, hinges and blades) turns with it: its
+rows and columns of the part's position and director 3-vectors are, a few steps later and to
+first order in everything but the spin, the earlier ones rotated by the angle turned in
+between. With T(ψ) the rotation of those 3-vectors by ψ about the spin axis (identity on every
+other unknown and on the constraint rows),
+
+    J(t + Δt) ≈ T(ΩΔt) J(t) T(ΩΔt)ᵀ,   so   J(t + Δt)⁻¹ ≈ T(ΩΔt) J(t)⁻¹ T(ΩΔt)ᵀ,
+
+and the LU factors of J(t) still drive a modified Newton iteration at t + Δt once the
+right-hand side is turned back and the update turned forward. The iteration converges to the
+same solution as with fresh factors (the residual is exact); only its rate depends on how good
+the turned matrix is. Measured on the rotor model (blades turning 1.5° per step): factors
+from the step before contract Newton's updates by 0.44 as they are and by 0.025 turned (0.048
+two steps old, 0.145 four).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from solver.rotations import rotation_about
+
+Array = NDArray[np.float64]
+
+
+class TurningParts:
+    """The position and director 3-vectors of the parts that spin at ``rate`` about ``axis``.
+
+    Parameters
+    ----------
+    system
+        The assembled model (:class:`solver.system.System`).
+    owners
+        State owners that spin (bodies, beams, links, the elements on them); their position
+        and director 3-vectors are turned, their other unknowns (second-order scalars such as
+        a curve parameter, first-order states) left as they are.
+    axis
+        The spin axis (global; normalized here).
+    rate
+        Spin rate Ω (rad/s): the parts turn by Ω Δt in Δt.
+    """
+
+    def __init__(self, system, owners: Sequence[object], axis: ArrayLike,
+                 rate: float) -> None:
+        lay = system.layout
+        axis = np.asarray(axis, dtype=float)
+        if axis.shape != (3,) or not np.all(np.isfinite(axis)) or not np.any(axis):
+            raise ValueError(f"axis = {axis.tolist()} must be a finite nonzero 3-vector")
+        if not np.isfinite(rate):
+            raise ValueError(f"rate = {rate!r} rad/s must be finite")
+        blocks = {id(b.owner): b for b in lay.blocks}
+        scalars = {id(o) for o in lay.unclassified}  # second-order, neither x nor d
+        vec = []
+        for o in owners:
+            if id(o) not in blocks:
+                raise ValueError(f"{getattr(o, 'name', o)!r} declares no state block")
+            b = blocks[id(o)]
+            if b.kind == "second" and id(o) not in scalars:  # whole 3-vectors (state.py)
+                start = lay.offset[o]
+                vec.append(np.arange(start, start + b.size).reshape(-1, 3))
+        # (m, 3) indices of the turned 3-vectors
+        self.vectors = np.concatenate(vec) if vec else np.zeros((0, 3), dtype=np.int64)
+        self.axis = axis / np.linalg.norm(axis)
+        self.rate = float(rate)
+        self.n = system.n
+
+    def turn(self, x: Array, angle: float, stages: int = 1) -> None:
+        """Rotate the parts' 3-vectors in ``x`` by ``angle`` (rad) about the axis, in place:
+        in each of the first ``stages`` blocks of n entries (a Newton vector's increments,
+        one block per stage of the scheme); the entries after them (multipliers) stay."""
+        rot = rotation_about(self.axis, angle)
+        for k in range(stages):
+            v = self.vectors + k * self.n
+            x[v] = x[v] @ rot.T
