@@ -353,3 +353,58 @@ def peters_he_shapes(xi, eta, sine, harmonic, coef, ncoef, cr, sr, out):
             for c in range(ncoef[i] - 2, -1, -1):
                 poly = poly * rho2 + coef[i, c]
             out[p, i] = poly * (sr[harmonic[i]] if sine[i] else cr[harmonic[i]])
+
+
+@njit(cache=True)
+def flow_terms(mu: float, lam_f: float, lam_m: float) -> tuple:
+    """Finite-state inflow's flow parameters: V_T, V_m, X and their derivatives by λ_m.
+
+    ``mu`` the in-plane and ``lam_f`` the through-disk free stream on ΩR, ``lam_m`` the
+    momentum inflow (:class:`solver.inflow.DynamicInflow`): λ = λ_f + λ_m,
+    V_T = √(μ² + λ²), V_m = (μ² + λ(λ + λ_m))/V_T, X = tan(χ/2) = μ/(V_T + λ); all zero with
+    no flow at all (a hover start: f = 0 and ∂f/∂α = 0 there), X = 0 in axial flow."""
+    lam = lam_f + lam_m
+    vt = math.hypot(mu, lam)
+    if vt == 0.0:
+        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    dvt = lam / vt
+    num = mu * mu + lam * (lam + lam_m)
+    vm = num / vt
+    dvm = (3.0 * lam + lam_m - vm * dvt) / vt  # d num/dλ_m = 2λ + (λ + λ_m)
+    if mu == 0.0:  # axial flow: no skew, whatever the sign of λ
+        return vt, vm, 0.0, dvt, dvm, 0.0
+    den = vt + lam  # > 0 when μ ≠ 0; tan(χ/2) = sin χ/(1 + cos χ)
+    return vt, vm, mu / den, dvt, dvm, -mu * (dvt + 1.0) / (den * den)
+
+
+@njit(cache=True)
+def inflow_rhs(a: Array, mom: Array, lp: Array, mu: float, lam_f: float, jacobian: bool,
+               jac: Array) -> Array:
+    """f = −V L(X)⁻¹ α of a finite-state inflow (dimensionless), with V = (V_T, V_m, …, V_m)
+    and L(X) = Σ_p X^p L_p (``lp`` (P, n, n)); with ``jacobian`` also ∂f/∂α into ``jac``
+    (n × n): d(L⁻¹α) = L⁻¹dα − L⁻¹ (dL/dX) L⁻¹α dX, dX = (dX/dλ_m) m·dα, dV = (dV/dλ_m) m·dα,
+    λ_m = m·α (``mom``)."""
+    n = a.shape[0]
+    lam_m = 0.0
+    for i in range(n):
+        lam_m += mom[i] * a[i]
+    vt, vm, x, dvt, dvm, dx = flow_terms(mu, lam_f, lam_m)
+    big = lp[lp.shape[0] - 1].copy()  # Horner in X
+    for p in range(lp.shape[0] - 2, -1, -1):
+        big = big * x + lp[p]
+    u = np.linalg.solve(big, a)  # L⁻¹α
+    f = np.empty(n)
+    for i in range(n):
+        f[i] = -(vt if i == 0 else vm) * u[i]  # the thrust state sees the total flow
+    if jacobian:
+        dbig = np.zeros((n, n))  # dL/dX = Σ_p p X^(p−1) L_p
+        for p in range(lp.shape[0] - 1, 0, -1):
+            dbig = dbig * x + p * lp[p]
+        inv = np.linalg.inv(big)
+        w = inv @ (dbig @ u)
+        for i in range(n):
+            v = vt if i == 0 else vm
+            dv = dvt if i == 0 else dvm
+            for j in range(n):
+                jac[i, j] = -v * (inv[i, j] - w[i] * dx * mom[j]) - dv * u[i] * mom[j]
+    return f

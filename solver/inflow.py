@@ -289,7 +289,6 @@ class DynamicInflow(Element):
             # ½τ weights, with τ = 1/(2π) for the axisymmetric states and 1/π for the harmonics
             self._half_tau = np.array([0.25 / math.pi if r == 0 else 0.5 / math.pi
                                        for (_, r, _) in self._states])
-        self._dlp = self._lp[1:] * np.arange(1, len(self._lp))[:, None, None]  # p L_p, p ≥ 1
         self._fit = self._fit_vectors()
 
     # -- validation ---------------------------------------------------------------------
@@ -487,20 +486,9 @@ class DynamicInflow(Element):
         return float(v[0]), float(-v[2])
 
     def _flow_terms(self, lam_m: float) -> tuple[float, ...]:
-        """V_T, V_m, X and their derivatives with respect to λ_m."""
-        mu, lam_f = self.free_stream
-        lam = lam_f + lam_m
-        vt = math.hypot(mu, lam)
-        if vt == 0.0:  # no flow at all (hover start): f = 0 and ∂f/∂α = 0 there
-            return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-        dvt = lam / vt
-        num = mu * mu + lam * (lam + lam_m)
-        vm = num / vt
-        dvm = (3.0 * lam + lam_m - vm * dvt) / vt  # d num/dλ_m = 2λ + (λ + λ_m)
-        if mu == 0.0:  # axial flow: no skew, whatever the sign of λ
-            return vt, vm, 0.0, dvt, dvm, 0.0
-        den = vt + lam  # > 0 when μ ≠ 0; tan(χ/2) = sin χ/(1 + cos χ)
-        return vt, vm, mu / den, dvt, dvm, -mu * (dvt + 1.0) / (den * den)
+        """V_T, V_m, X and their derivatives with respect to λ_m
+        (:func:`solver.aero_kernels.flow_terms`)."""
+        return aero_kernels.flow_terms(*self.free_stream, lam_m)
 
     def flow(self, states: ArrayLike) -> InflowParameters:
         """The flow parameters (μ, λ_f, λ_m, λ, V_T, V_m, χ, X) for given states."""
@@ -516,27 +504,16 @@ class DynamicInflow(Element):
 
     def rhs(self, states: ArrayLike, jacobian: bool = False):
         """f = −V L⁻¹ α, the element's own right-hand side (dimensionless; the equation in
-        seconds is (K/Ω) α̇ = F + f).
+        seconds is (K/Ω) α̇ = F + f), compiled (:func:`solver.aero_kernels.inflow_rhs`: the
+        Newton iterations call it at every residual, and the NumPy form spent some 70 µs in
+        calls on these 8 × 8 matrices).
 
         Returns f, or (f, ∂f/∂α) with ∂f/∂α dense n × n if ``jacobian``.
         """
-        a = np.asarray(states, dtype=float)
-        vt, vm, x, dvt, dvm, dx = self._flow_terms(float(self._mom @ a))
-        big = self.l_matrix(x)
-        v = np.full(len(a), vm)
-        v[0] = vt  # the thrust state sees the total flow, the others its linearization
-        u = np.linalg.solve(big, a)  # L⁻¹α (no inverse unless the Jacobian needs it)
-        f = -v * u
-        if not jacobian:
-            return f
-        lu_inv = np.linalg.inv(big)
-        dv = np.full(len(a), dvm)
-        dv[0] = dvt
-        dbig = np.tensordot(x ** np.arange(len(self._dlp)), self._dlp, axes=1)  # dL/dX
-        # d(L⁻¹α) = L⁻¹ dα − L⁻¹ (dL/dX) L⁻¹α dX, dX = (dX/dλ_m) c·dα, dV = (dV/dλ_m) c·dα
-        du = lu_inv - np.outer(lu_inv @ (dbig @ u) * dx, self._mom)
-        jac = -v[:, None] * du - np.outer(dv * u, self._mom)
-        return f, jac
+        a = np.ascontiguousarray(states, dtype=float)
+        jac = np.empty((len(a), len(a)))
+        f = aero_kernels.inflow_rhs(a, self._mom, self._lp, *self.free_stream, jacobian, jac)
+        return (f, jac) if jacobian else f
 
     # -- steady state -------------------------------------------------------------------
     def uniform_forcing(self, thrust_coefficient: float) -> Array:
