@@ -321,6 +321,13 @@ def beam_line(zero_lift_angle: float = 0.0) -> tuple[Model, LiftingLine]:
     return model, line
 
 
+def _dense(n: int, vals, rows, cols):
+    """The n × n matrix with ``vals`` summed at (rows, cols)."""
+    m = np.zeros((n, n))
+    np.add.at(m, (rows, cols), vals)
+    return m
+
+
 def test_complex_step_jacobians_match_finite_differences():
     """∂f/∂q, ∂f/∂v, ∂f/∂a of a twisted, moving beam line in forward flight with a Peters–He
     inflow, against central differences of the forces."""
@@ -336,9 +343,7 @@ def test_complex_step_jacobians_match_finite_differences():
     ja = st.acceleration_jacobian(q, v, 0.0, a)
 
     def dense(vals, rows, cols):
-        m = np.zeros((system.n, system.n))
-        np.add.at(m, (rows, cols), vals)
-        return m
+        return _dense(system.n, vals, rows, cols)
 
     idx = st.force_idx
 
@@ -380,9 +385,7 @@ def test_summed_tangent_equals_the_three_weighted_jacobians():
     ja = st.acceleration_jacobian(q, v, 0.0, a)
 
     def dense(vals, rows, cols):
-        m = np.zeros((system.n, system.n))
-        np.add.at(m, (rows, cols), vals)
-        return m
+        return _dense(system.n, vals, rows, cols)
 
     want = (wq * dense(jq, st.fq_rows, st.fq_cols) + dense(jv * wv[st.fv_cols], st.fv_rows,
                                                             st.fv_cols)
