@@ -70,12 +70,19 @@ class TurningParts:
         self.axis = axis / np.linalg.norm(axis)
         self.rate = float(rate)
         self.n = system.n
+        self._angle, self._rot, self._back = 0.0, np.eye(3), np.eye(3)  # R(ψ), R(−ψ)
 
     def turn(self, x: Array, angle: float, stages: int = 1) -> None:
         """Rotate the parts' 3-vectors in ``x`` by ``angle`` (rad) about the axis, in place:
         in each of the first ``stages`` blocks of n entries (a Newton vector's increments,
         one block per stage of the scheme); the entries after them (multipliers) stay."""
-        _turn(x, self.vectors, rotation_about(self.axis, angle), stages, self.n)
+        # Newton turns by the same ± angle a dozen times a step: R(ψ) and R(−ψ) = R(ψ)ᵀ kept
+        if angle == -self._angle:
+            self._angle, self._rot, self._back = angle, self._back, self._rot
+        elif angle != self._angle:
+            self._angle, self._rot = angle, rotation_about(self.axis, angle)
+            self._back = np.ascontiguousarray(self._rot.T)
+        _turn(x, self.vectors, self._rot, stages, self.n)
 
 
 @njit(cache=True)
