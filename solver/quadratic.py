@@ -156,6 +156,7 @@ class QuadraticConstraints:
         self.hess_rows = np.concatenate([self.h_i, self.h_j])
         self.hess_cols = np.concatenate([self.h_j, self.h_i])
         self._w_cache: dict[float, NDArray[np.float64]] = {}
+        self._s_cache: dict[tuple, tuple] = {}
         self._no_jac = np.zeros(0)
 
     def weights(self, t: float, order: int = 0) -> NDArray[np.float64]:
@@ -173,8 +174,18 @@ class QuadraticConstraints:
                 return self.h_val, self.g_val, self.c_val
             z = np.zeros
             return z(len(self.h_val)), z(len(self.g_val)), z(len(self.c_val))
-        w = self.weights(t, order)
-        return self.h_val * w[self.h_fun], self.g_val * w[self.g_fun], self.c_val * w[self.c_fun]
+        key = (t, order)  # the scaled coefficients too: Newton's iterations share one t
+        out = self._s_cache.get(key)
+        if out is None:
+            if len(self._s_cache) > 8:
+                self._s_cache.clear()
+            w = self.weights(t, order)
+            out = (self.h_val * w[self.h_fun], self.g_val * w[self.g_fun],
+                   self.c_val * w[self.c_fun])
+            for a in out:
+                a.flags.writeable = False  # shared by the calls at this t
+            self._s_cache[key] = out
+        return out
 
     def value(self, q: NDArray[np.float64], t: float, order: int = 0) -> NDArray[np.float64]:
         """C(q, t) (order 0) or its partial time derivatives ∂ⁿC/∂tⁿ at fixed q."""
