@@ -174,6 +174,11 @@ class Integrator:
 
     Schemes implement ``_begin`` (constants of the step), ``_start`` (the plain predictor of
     x = (Δq, μ, ν)), ``_residual(x)``, ``_tangent_weights(x)`` and ``_finish(x)``.
+
+    ``tol`` is Newton's tolerance on the updates of q relative to q's scale; ``book_work``
+    false leaves the work of loads and drivers unbooked (``work`` is then NaN);
+    ``turning`` (:class:`solver.turning.TurningParts`) names the parts that spin at a known
+    rate, with which LU factors kept from step to step are turned.
     """
 
     name = "base"

@@ -23,6 +23,7 @@ from numpy.typing import NDArray
 
 from solver.jit import njit
 from solver.sparse_lu import RefactorLU
+from solver.turning import TurningParts
 
 NEWTON_MAXITER = 30  # Maximum number of Newton iterations per step.
 SLOW_RATE = 0.25  # Contraction rate above which the LU factors are refreshed.
@@ -60,7 +61,7 @@ class LinearSolver:
     first ``stages`` blocks of n unknowns.
     """
 
-    def __init__(self, turning=None, stages: int = 1) -> None:
+    def __init__(self, turning: TurningParts | None = None, stages: int = 1) -> None:
         self.lu: RefactorLU | None = None
         self._factors = RefactorLU()
         self.turning = turning

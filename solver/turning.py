@@ -12,8 +12,8 @@ and the LU factors of J(t) still drive a modified Newton iteration at t + Δt on
 right-hand side is turned back and the update turned forward. The iteration converges to the
 same solution as with fresh factors (the residual is exact); only its rate depends on how good
 the turned matrix is. Measured on the rotor model (blades turning 1.5° per step): factors
-from the step before contract Newton's updates by 0.44 as they are and by 0.025 turned (0.048
-two steps old, 0.145 four).
+from the step before contract Newton's updates by 0.44 as they are and by 0.03–0.09 turned
+(0.05 two steps old, 0.15 four; the rate varies along the revolution in forward flight).
 """
 
 from __future__ import annotations
