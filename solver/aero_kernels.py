@@ -238,10 +238,11 @@ def local_jacobian(x, xd, xa, mu, al, phi, wts, phi_p, wts_p, props, rho, vinf, 
                                   out[:12], out[12 : 12 + n], out[12 + n :], det)
                     for i in range(ni):
                         cal[i] = al[k, i]
-                for c in range(ni):
-                    for i in range(m):
-                        jac[k, i, col] = out[i].imag / h * phi[k, c] if pp > 0.0 else 0.0
-                    col += 1
+                for i in range(m):
+                    d = out[i].imag / h if pp > 0.0 else 0.0  # ∂/∂λ
+                    for c in range(ni):
+                        jac[k, i, col + c] = d * phi[k, c]
+                col += ni
                 continue
             size = 12 if block in (0, 3, 4) else n
             arr = cx if block == 0 else (cmu if block == 1 else (cxd if block == 3 else cxa))

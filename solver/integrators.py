@@ -40,7 +40,7 @@ import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from solver.jit import njit
-from solver.newton import STALE_RATE, LinearSolver, max_abs, newton
+from solver.newton import STALE_ITERATIONS, STALE_RATE, LinearSolver, max_abs, newton
 from solver.system import BLOCKS, System, _scatter_add, csc_pattern
 from solver.turning import TurningParts
 
@@ -328,7 +328,8 @@ class Integrator:
         return info
 
     # ------------------------------------------------------------------ the template
-    stale_rate, stale_iterations = STALE_RATE, 4  # when kept factors are refreshed (newton)
+    # when kept factors are refreshed (newton)
+    stale_rate, stale_iterations = STALE_RATE, STALE_ITERATIONS
 
     def _solve(self) -> StepInfo:
         """One step: Newton on the scheme's residual with the scheme's tangent."""

@@ -28,6 +28,7 @@ from solver.turning import TurningParts
 NEWTON_MAXITER = 30  # Maximum number of Newton iterations per step.
 SLOW_RATE = 0.25  # Contraction rate above which the LU factors are refreshed.
 STALE_RATE = 0.02  # Rate above which factors from an earlier step are not worth keeping.
+STALE_ITERATIONS = 4  # Iterations after which factors from an earlier step are refreshed.
 # Updates that stop shrinking while within 1/ROUNDOFF_FLOOR of the tolerance are roundoff noise
 # (the KKT matrix's condition number times machine precision), not divergence.
 ROUNDOFF_FLOOR = 1e-5
@@ -129,7 +130,8 @@ def max_abs(x: NDArray) -> float:
 def newton(residual: Callable[[NDArray], NDArray], jacobian: Callable[[NDArray], object],
            x0: NDArray, error: Callable[[NDArray], float], tol: float, solver: LinearSolver,
            reuse: bool = True, full: bool = False, estimate: bool = False,
-           stale_rate: float = STALE_RATE, stale_iterations: int = 4) -> NewtonResult:
+           stale_rate: float = STALE_RATE,
+           stale_iterations: int = STALE_ITERATIONS) -> NewtonResult:
     """Solve residual(x) = 0 from x0.
 
     An update dx has converged when ``error(dx) <= tol``; ``error`` must be a maximum norm
