@@ -9,12 +9,13 @@ per hour and each case's solver time and steps per second. ``--profile`` also pr
 in this process (pyinstrument if installed, else cProfile) and prints where the time goes.
 
 ``--case`` measures issue 13's per-case goals side by side in one process: one free case at the
-defaults (the composed fourth-order step) and at the previous defaults (the plain step with
-Richardson at 80 and 160 steps/rev), alternately, each ``--repeat`` times after the reference run
-(which also loads the compiled kernels); it prints the best CPU time, the revolutions simulated
-and each one's error against a step-converged reference (the plain step at 320 and 640
-steps/rev, Richardson-extrapolated; its own error about 1e-4): the largest over harmonics 0–8
-of every signal, relative to that signal's largest harmonic.
+defaults (the composed fourth-order step with its step-error estimate), without the estimate
+(``error_estimate = false``) and with ``richardson = true``, alternately, each ``--repeat``
+times after the reference run (which also loads the compiled kernels); it prints the best CPU
+time, the revolutions simulated (those at the coarser step of the estimate also apart), the
+stored step-error estimate and each one's error against a step-converged reference (the plain
+step at 320 and 640 steps/rev, Richardson-extrapolated; its own error about 1e-4): the largest
+over harmonics 0–8 of every signal, relative to that signal's largest harmonic.
 """
 
 from __future__ import annotations
@@ -78,9 +79,8 @@ def profile_case() -> None:
 
 CASE_SETTINGS = {
     "default": {},
-    "previous default (plain, Richardson 80 and 160)": {"composition": "none",
-                                                         "steps_per_rev": 160,
-                                                         "richardson": True},
+    "default without the error estimate": {"error_estimate": False},
+    "richardson": {"richardson": True},
 }
 
 
@@ -111,6 +111,8 @@ def one_case(repeat: int) -> None:
             "case": name, "cpu_seconds_best": round(min(cpu[name]), 2),
             "cpu_seconds": [round(c, 2) for c in cpu[name]],
             "revolutions": ds.attrs["simulated_revolutions"],
+            "of_which_at_the_coarser_step": ds.attrs["estimate_revolutions"],
+            "step_error_estimate": float(f"{ds.attrs['step_error_estimate']:.3g}"),
             "steps": ds.attrs["steps"], "substeps": ds.attrs["substeps"],
             "newton_iterations": ds.attrs["newton_iterations"],
             "harmonics_error": float(f"{np.max(np.abs(harmonics(ds) - ref) / scale):.3g}")}))

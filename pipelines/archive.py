@@ -229,7 +229,7 @@ def case_summary(ds: xr.Dataset, spec: ModelSpec, n_max: int = N_MAX) -> xr.Data
         the declared histories over the last recorded revolution (dim ``time_in_rev``,
         coordinate ``psi`` in degree, starting at psi = 0), ``run_hub_speed`` (rad s-1),
         ``run_revolutions``, ``run_samples_per_rev``, ``run_transient_revolutions`` and, for a
-        Richardson-extrapolated run, ``run_step_error_estimate``.
+        run that estimated it, ``run_step_error_estimate``.
         Otherwise: the declared histories whole (dim ``sample``) with their ``time`` (s).
         Every variable has the ``units`` and ``long_name`` of its declaration.
 
@@ -269,12 +269,16 @@ def case_summary(ds: xr.Dataset, spec: ModelSpec, n_max: int = N_MAX) -> xr.Data
                 {"units": "1", "long_name": "revolutions simulated before recording"},
             )
         if np.isfinite(ds.attrs.get("step_error_estimate", np.nan)):
+            extrapolated = bool(ds.attrs.get("richardson", 0))
             out["run_step_error_estimate"] = (
                 (), float(ds.attrs["step_error_estimate"]),
                 {"units": "1", "long_name": "estimated time-step error of the harmonics at the "
-                 "time step (Richardson: |c(h) - c(2h)|/3, largest over harmonics 0-8 and "
-                 "signals, relative to each signal's largest harmonic); the archived harmonics "
-                 "are extrapolated and carry a fraction of it"},
+                 "time step (Richardson: |c(h) - c(H)|/((H/h)^p - 1) from the periodic "
+                 "response at H, about 2h; largest over harmonics 0-8 and signals, relative to "
+                 "each signal's largest harmonic)",
+                 "comment": ("the archived harmonics are extrapolated to zero step and carry a "
+                             "fraction of it") if extrapolated else
+                 "the archived harmonics are those of the time step and carry it"},
             )
     else:
         out = xr.Dataset()

@@ -30,11 +30,17 @@ marching. The time integration is the energy-preserving ``ep`` step, symmetric a
 2, composed into a fourth-order step (``composition``, default Suzuki's five substeps:
 :mod:`solver.composition`): at the default 40 steps/rev the harmonics 0–8 are within 0.18 %
 of the step-converged ones (the plain ``ep`` at 160 steps/rev: 3.3 %), at the cost of 200
-substeps per revolution. With ``richardson`` the response is also computed at twice the step,
-the fine run starting from the coarse periodic state, and the harmonics 0–8 are extrapolated
-to zero step (:func:`studies.periodic.richardson`, the h⁴ term of a composed run or the h²
-term of a plain one), which stores the estimated time-step error in the archive
-(``step_error_estimate``) but takes a second periodic run.
+substeps per revolution.
+
+Each run also estimates that error (``error_estimate``, default on): from the recorded run's
+end state, a few quarter revolutions at twice the step are extrapolated to that step's periodic
+response (:func:`studies.periodic.sector_response`; 1.5–3 revolutions at twice the step, the
+work of about one revolution at the step), and the harmonics 0–8 at the two steps give the
+estimate |c(h) − c(2h)|/15 (:func:`studies.periodic.richardson`; /3 for the plain step),
+stored as ``step_error_estimate``: 1.68e-3 on the free case against its measured 1.83e-3.
+With ``richardson`` the coarser response is found ten times tighter and the recorded
+harmonics 0–8 are extrapolated to zero step (the h⁴ term of a composed run or the h² term of
+a plain one taken out).
 """
 
 from __future__ import annotations
@@ -60,11 +66,17 @@ from studies.absorbers import OUTPUTS as ABSORBER_OUTPUTS
 from studies.absorbers import PARAMETERS as ABSORBERS
 from studies.harmonics import N_MAX
 from studies.parameters import ModelSpec, Output, Param, ParameterError
-from studies.periodic import march, richardson, shoot, stepper, to_rotating
+from studies.periodic import march, richardson, sector_response, shoot, stepper, to_rotating
 
 Z = np.array([0.0, 0.0, 1.0])
 NEWTON_TOL = 1e-8  # relative Newton tolerance on q (m); see run()
 PLAIN_MIN_STEPS = 64  # steps per revolution at least, for the plain (uncomposed) ep step
+# relative accuracy of the coarser step's periodic harmonics against their change from the
+# recorded ones (studies.periodic.sector_response): the error estimate's own accuracy
+ESTIMATE_ACCURACY = 0.1
+# the same for richardson = true, whose extrapolated harmonics carry the coarser step's
+# harmonics' error divided by 2^p - 1 (Richardson's factor)
+RICHARDSON_ACCURACY = 0.01
 
 # UH-60-class values (public: 4 blades of 116.5 kg, R = 8.18 m, Ω = 27 rad/s). The hub mass,
 # shaft-head mass and fuselage restraint are assumptions: the fuselage in-plane mode at the hub
@@ -98,8 +110,11 @@ PARAMETERS: dict[str, Param] = {
     "composition": Param("suzuki", "1", "symmetric composition of the ep step into a "
                          "fourth-order step: suzuki (5 substeps), yoshida (3), or none (the "
                          "plain second-order ep step)", choices=(*COMPOSITIONS, "none")),
-    "richardson": Param(False, "1", "also run at twice the time step and extrapolate the "
-                        "harmonics 0-8 to zero step (Richardson: error O(h^4) -> O(h^6) "
+    "error_estimate": Param(True, "1", "estimate the time-step error of the harmonics 0-8 "
+                            "from the periodic response at about twice the step (stored as "
+                            "step_error_estimate)"),
+    "richardson": Param(False, "1", "also extrapolate the harmonics 0-8 to zero step from the "
+                        "response at twice the time step (Richardson: error O(h^4) -> O(h^6) "
                         "composed, O(h^2) -> O(h^4) plain), storing the error estimate"),
     "revolutions": Param(2, "1", "whole revolutions recorded once periodic", minimum=1,
                          maximum=50),
@@ -132,6 +147,11 @@ def check(p: dict[str, Any]) -> None:
         raise ParameterError(f"steps_per_rev = {p['steps_per_rev']}: must be a multiple of "
                              f"{multiple} (shooting on the quarter-revolution map steps whole "
                              "quarter revolutions, Richardson also at twice the step)")
+    if p["richardson"] and periodic.coarser_steps(p["steps_per_rev"], multiple // 2,
+                                                  N_MAX) is None:
+        raise ParameterError(f"steps_per_rev = {p['steps_per_rev']}: must be at least "
+                             f"{4 * N_MAX + 4} with richardson = true (twice the step must "
+                             f"resolve harmonic {N_MAX})")
 
 
 def build(p: dict[str, Any]):
@@ -175,8 +195,9 @@ def build(p: dict[str, Any]):
 
 
 def run(params: dict[str, Any]) -> xr.Dataset:
-    """Reach the periodic response (shooting or marching), record whole revolutions, and with
-    ``richardson`` extrapolate the harmonics from twice the step (see the module docstring)."""
+    """Reach the periodic response (shooting or marching) and record whole revolutions; then
+    estimate the harmonics' time-step error from the periodic response at a coarser step
+    and, with ``richardson``, extrapolate them to zero step (see the module docstring)."""
     p = SPEC.complete(params)
     model, hub, shaft, parts, holes, (k, c) = build(p)
     omega = p["hub_speed"]
@@ -186,18 +207,15 @@ def run(params: dict[str, Any]) -> xr.Dataset:
     absorbers = AbsorberProbe(sysm, parts, hub)
     sym = symmetry(sysm, hub, shaft, parts) if p["shooting_window"] else None
 
-    def periodic_run(n: int, start: dict[str, Any] | None):
-        """The periodic record at n steps per revolution, from ``start`` (an integrator
-        state) or the model's initial state."""
+    def integrator(n: int):
+        """The time integration at n steps per revolution."""
         # harmonics do not need the roundoff-level solve that exact energy bookkeeping needs:
         # measured on the free case, 1e-8 instead of 1e-11 moves every archived output by
         # ≤ 4e-10 of its scale and takes 3.13 → 2.26 Newton iterations per step
         integ = make_integrator(sysm, "ep", 2 * np.pi / omega / n, tol=NEWTON_TOL)
-        if p["composition"] != "none":
-            integ = Composed(integ, p["composition"])
-        if start is not None:
-            integ.restore(start)
+        return integ if p["composition"] == "none" else Composed(integ, p["composition"])
 
+    def sampler(integ):
         def sample() -> np.ndarray:
             q, v = integ.q, integ.v
             x = q[os_ : os_ + 3]
@@ -205,47 +223,73 @@ def run(params: dict[str, Any]) -> xr.Dataset:
             cm, phis = absorbers(q, integ.t)
             f = k * x + c * xd  # force the springs and dampers pass to the fuselage
             return np.array([integ.t, x[0], x[1], f[0], f[1], cm[0], cm[1], *np.degrees(phis)])
+        return sample
 
-        def signals(block: np.ndarray) -> np.ndarray:
-            # per signal (hub x, y in the rotating frame, m; pin angles, degree): changes
-            # relative to that signal's largest harmonic
-            xr_, yr_ = to_rotating(omega, block[:, 0], block[:, 1], block[:, 2])
-            return np.column_stack([xr_, yr_, block[:, 7:]])
+    def signals(block: np.ndarray) -> np.ndarray:
+        # per signal (hub x, y in the rotating frame, m; pin angles, degree): changes
+        # relative to that signal's largest harmonic
+        xr_, yr_ = to_rotating(omega, block[:, 0], block[:, 1], block[:, 2])
+        return np.column_stack([xr_, yr_, block[:, 7:]])
 
-        def observe(block: np.ndarray, j: int) -> np.ndarray:
-            # the quarter-revolution map's observations at the starting phase: the hub motion
-            # in the fixed frame (T/4-periodic), the pin angles moved j bifilars ahead
-            return np.column_stack([block[:, 1:3], np.roll(block[:, 7:], j, axis=1)])
+    n_sec = N_BIFILARS if sym is not None else 1  # sectors of the map iterated
 
-        hint = "raise max_revolutions or pin_damping_ratio"
-        if sym is not None:
-            rec = shoot(integ, sample, signals, observe=observe, symmetry=sym, system=sysm,
-                        steps_per_rev=n, revolutions=p["revolutions"],
-                        max_revolutions=p["max_revolutions"],
-                        tolerance=p["periodic_tolerance"], window=p["shooting_window"],
-                        max_restarts=p["shooting_restarts"], hint=hint)
-        else:
-            rec = march(stepper(integ, omega), sample, signals, steps_per_rev=n,
-                        revolutions=p["revolutions"], max_revolutions=p["max_revolutions"],
-                        tolerance=p["periodic_tolerance"], hint=hint,
-                        window=p["extrapolation_window"])
-        return rec, integ
+    def align(block: np.ndarray, j: int) -> np.ndarray:
+        # a block of samples ending j sector periods after t = 0 at the phase of t = 0: the
+        # fixed-frame hub signals as they are (the 4P forcing repeats every quarter
+        # revolution), the pin angles moved ahead by the bifilars turned past
+        out = block.copy()
+        out[:, 7:] = np.roll(block[:, 7:], j * (N_BIFILARS // n_sec), axis=1)
+        return out
+
+    def observe(block: np.ndarray, j: int) -> np.ndarray:
+        # the quarter-revolution map's observations: the hub motion and the pin angles
+        return align(block, j)[:, [1, 2, *range(7, block.shape[1])]]
 
     t0 = time.perf_counter()
-    runs = []
-    start = None
-    if p["richardson"]:
-        # the periodic response at twice the step first: its state starts the fine run
-        runs.append(periodic_run(nrev // 2, None))
-        start = runs[0][1].state()
-    runs.append(periodic_run(nrev, start))
-    rec = runs[-1][0]
+    integ = integrator(nrev)
+    hint = "raise max_revolutions or pin_damping_ratio"
+    if sym is not None:
+        rec = shoot(integ, sampler(integ), signals, observe=observe, symmetry=sym,
+                    system=sysm, steps_per_rev=nrev, revolutions=p["revolutions"],
+                    max_revolutions=p["max_revolutions"], tolerance=p["periodic_tolerance"],
+                    window=p["shooting_window"], max_restarts=p["shooting_restarts"],
+                    hint=hint)
+    else:
+        rec = march(stepper(integ, omega), sampler(integ), signals, steps_per_rev=nrev,
+                    revolutions=p["revolutions"], max_revolutions=p["max_revolutions"],
+                    tolerance=p["periodic_tolerance"], hint=hint,
+                    window=p["extrapolation_window"])
     data = rec.samples
+    runs = [(integ, nrev)]
+    notes = [rec.note] if rec.note else []
     step_error = float("nan")
-    if p["richardson"]:
-        data, est = richardson(data, runs[0][0].samples, omega, N_MAX,
-                               order=2 if p["composition"] == "none" else 4)
-        step_error = float(est.max())
+    n_c = periodic.coarser_steps(nrev, n_sec, N_MAX)
+    wanted = p["error_estimate"] or p["richardson"]
+    if wanted and n_c is None:
+        notes.append(f"no step-error estimate at steps_per_rev = {nrev}: a coarser step would "
+                     f"not resolve harmonic {N_MAX}")
+    elif wanted:
+        # the periodic response at the coarser step, from the recorded one's end state: its
+        # harmonics against the recorded ones estimate the time-step error (Richardson)
+        coarse = integrator(n_c)
+        coarse.restore(integ.state())
+        accuracy = RICHARDSON_ACCURACY if p["richardson"] else ESTIMATE_ACCURACY
+        runs.append((coarse, n_c))
+        try:
+            rev, uncertainty, _ = sector_response(
+                coarse, sampler(coarse), align, n_sectors=n_sec, steps_per_rev=n_c,
+                reference=data, omega=omega, n_max=N_MAX, accuracy=accuracy,
+                max_iterates=8 * n_sec if p["richardson"] else 4 * n_sec)
+        except RuntimeError as exc:
+            notes.append(f"no step-error estimate: {exc}")
+        else:
+            corrected, est = richardson(data, rev, omega, N_MAX,
+                                        order=2 if p["composition"] == "none" else 4)
+            step_error = float(est.max())
+            if p["richardson"]:
+                data = corrected
+            if uncertainty > accuracy:
+                notes.append(f"step-error estimate uncertain by {uncertainty:.0%}")
     t = data[:, 0]
     x_rot, y_rot = to_rotating(omega, t, data[:, 1], data[:, 2])
     ds = SPEC.dataset({
@@ -261,24 +305,24 @@ def run(params: dict[str, Any]) -> xr.Dataset:
         "bifilar_cm_y_fixed": data[:, 6],
         "pin_angle": data[:, 7:].T,
     })
-    steps = sum(i.n_steps for _, i in runs)
-    notes = [r.note for r, _ in runs if r.note]
     ds.attrs.update(hub_speed=float(omega), revolutions=int(p["revolutions"]),
                     samples_per_rev=int(nrev), extrapolated=int(rec.extrapolated),
                     extrapolation_residual=float(rec.residual),
                     transient_revolutions=int(rec.transient),
-                    simulated_revolutions=float(sum(i.n_steps / n for (_, i), n in zip(
-                        runs, [nrev // 2, nrev][-len(runs):], strict=True))),
-                    shooting_restarts=int(sum(r.restarts for r, _ in runs)),
+                    simulated_revolutions=float(sum(i.n_steps / n for i, n in runs)),
+                    estimate_revolutions=float(sum(i.n_steps / n for i, n in runs[1:])),
+                    estimate_samples_per_rev=int(n_c if len(runs) > 1 else 0),
+                    shooting_restarts=int(rec.restarts),
                     message="; ".join(notes), richardson=int(p["richardson"]),
                     step_error_estimate=step_error,
                     tuning_order_linear=float(holes.order_linear),
                     pin_damping=float(0.0 if p["bifilar"] == "locked" else pin_damping(p, holes)),
                     fuselage_stiffness=float(k), fuselage_damping=float(c),
-                    solver_seconds=time.perf_counter() - t0, steps=int(steps),
-                    substeps=int(sum(getattr(i, "n_substeps", i.n_steps) for _, i in runs)),
+                    solver_seconds=time.perf_counter() - t0,
+                    steps=int(sum(i.n_steps for i, _ in runs)),
+                    substeps=int(sum(getattr(i, "n_substeps", i.n_steps) for i, _ in runs)),
                     composition=p["composition"],
-                    newton_iterations=int(sum(i.n_iterations for _, i in runs)))
+                    newton_iterations=int(sum(i.n_iterations for i, _ in runs)))
     return ds
 
 

@@ -12,8 +12,10 @@ revolutions instead of dozens (:func:`march`).
 
 :func:`shoot` goes further for models with a cyclic symmetry (four blades, four bifilars): it
 extrapolates the fixed point of the one-N-th-revolution map and restarts the model from it,
-so that the recorded revolutions are marched from a periodic state; :func:`richardson`
-extrapolates the harmonics of a periodic response computed at two time steps to zero step.
+so that the recorded revolutions are marched from a periodic state. :func:`sector_response`
+finds the periodic response of the same model at another time step from there, by
+extrapolating a few iterates of its sector map, and :func:`richardson` compares the harmonics
+of the two steps: the time-step error of the harmonics, and their extrapolation to zero step.
 """
 
 from __future__ import annotations
@@ -489,16 +491,17 @@ def richardson(fine: Array, coarse: Array, omega: float, n_max: int,
     The periodic response of a symmetric one-step scheme (the midpoint-type ``ep``, or its
     symmetric composition, :mod:`solver.composition`) has an error expansion in even powers of
     the step, so the harmonics c(h) = c + a hᵖ + O(hᵖ⁺²) of the response at h (``fine``) and
-    2h (``coarse``) give c ≈ c(h) + (c(h) − c(2h))/(2ᵖ − 1) with error O(hᵖ⁺²): p = 2 for
-    ``ep`` (the factor 1/3), 4 for its fourth-order composition (1/15). The correction of
-    harmonics 0..n_max, a band-limited periodic signal, is added to every sample of ``fine``;
-    harmonics above n_max keep the fine step's error.
+    H = rh (``coarse``, r > 1) give c ≈ c(h) + (c(h) − c(H))/(rᵖ − 1) with error O(hᵖ⁺²):
+    p = 2 for ``ep`` (with r = 2 the factor 1/3), 4 for its fourth-order composition (1/15).
+    The correction of harmonics 0..n_max, a band-limited periodic signal, is added to every
+    sample of ``fine``; harmonics above n_max keep the fine step's error.
 
     Parameters
     ----------
     fine, coarse
         Whole periodic revolutions of samples (rows: time in s, then the signals), at h and
-        2h; the last revolution of each is used (``fine`` has twice the samples per rev).
+        H > h, one sample per step; the last revolution of each is used (at least
+        2 n_max + 2 samples per revolution).
     omega
         Rotor speed (rad/s).
     n_max
@@ -519,12 +522,14 @@ def richardson(fine: Array, coarse: Array, omega: float, n_max: int,
     period = 2 * np.pi / omega
     n_f = round(period / (fine[1, 0] - fine[0, 0]))
     n_c = round(period / (coarse[1, 0] - coarse[0, 0]))
-    if n_f != 2 * n_c or fine.shape[0] % n_f or coarse.shape[0] % n_c:
-        raise ValueError(f"richardson: need whole revolutions at h and 2h (got {n_f} and {n_c} "
+    if (n_f <= n_c or n_c < 2 * n_max + 2 or fine.shape[0] % n_f
+            or coarse.shape[0] % n_c):
+        raise ValueError(f"richardson: need whole revolutions at h and at a coarser step with "
+                         f"at least {2 * n_max + 2} samples per revolution (got {n_f} and {n_c} "
                          "samples per revolution)")
     c_f = referred_harmonics(fine[-n_f:], omega, n_max)
     c_c = referred_harmonics(coarse[-n_c:], omega, n_max)
-    delta = (c_f - c_c) / (2**order - 1)
+    delta = (c_f - c_c) / ((n_f / n_c) ** order - 1)
     k = np.arange(n_max + 1)
     phase = np.exp(1j * omega * np.outer(fine[:, 0], k))  # (samples, harmonics)
     weight = np.where(k == 0, 1.0, 2.0)
@@ -534,3 +539,113 @@ def richardson(fine: Array, coarse: Array, omega: float, n_max: int,
     estimate = np.divide(np.abs(delta).max(axis=0), scale, out=np.zeros_like(scale),
                          where=scale > 0)
     return corrected, estimate
+
+
+def coarser_steps(steps_per_rev: int, n_sectors: int, n_max: int) -> int | None:
+    """Steps per revolution of the coarser companion of a run at ``steps_per_rev``: the largest
+    multiple of the sectors at most half of it (twice the step when it divides), or ``None``
+    when that leaves fewer than 2 n_max + 2 samples per revolution (harmonic n_max would not
+    be resolved)."""
+    n_c = steps_per_rev // 2 // n_sectors * n_sectors
+    return n_c if n_c >= 2 * n_max + 2 else None
+
+
+def sector_response(integ, sample: Callable[[], Array], align: Callable[[Array, int], Array],
+                    *, n_sectors: int, steps_per_rev: int, reference: Array, omega: float,
+                    n_max: int = 8, min_iterates: int = 6, max_iterates: int = 16,
+                    accuracy: float = 0.1) -> tuple[Array, float, int]:
+    """The periodic response of ``integ`` near its state, by extrapolating its sector map.
+
+    Started on (or near) the periodic response of the same model at another time step, e.g.
+    at the end of :func:`shoot`'s record, the iterates of the one-N-th-revolution map at this
+    step converge to this step's periodic response, along the model's slow modes. As in
+    :func:`shoot`, reduced-rank extrapolation of the iterates' blocks of samples, each aligned
+    to the phase of t = 0 (``align``), gives weights γ whose combination of the blocks is the
+    fixed point's block (:func:`rre_weights`), here without restarting the model: the
+    combination is the result. By the symmetry the fixed point's block, unaligned sector by
+    sector, is the whole revolution. Iterates are marched until the harmonics 0..n_max of the
+    last three extrapolations agree within ``accuracy`` of their largest change from
+    ``reference`` (each relative to the signal's largest harmonic in ``reference``): the
+    difference the caller needs, to that relative accuracy. (The extrapolation's residual is
+    no measure of its error until the iterates span the slow modes.)
+
+    Parameters
+    ----------
+    integ
+        The integrator, at a whole sector period; it is stepped.
+    sample
+        One row of samples after a step (time in s first), as for :func:`shoot`.
+    align
+        ``align(block, j)``: the block (rows of samples) ending j sector periods after t = 0,
+        moved to the phase of t = 0 (per-sector columns rolled by j); ``align(block, -j)``
+        undoes it. All columns but the time are combined.
+    n_sectors, steps_per_rev
+        Sectors of the symmetry (1: the one-revolution map) and steps per revolution of
+        ``integ`` (a multiple of ``n_sectors``).
+    reference
+        Whole revolutions of samples of the other step's periodic response (the last one is
+        used), for the stopping test.
+    omega
+        Rotor speed (rad/s).
+    n_max, min_iterates, max_iterates, accuracy
+        Highest harmonic compared, least and most iterates, and the stopping test's relative
+        accuracy.
+
+    Returns
+    -------
+    revolution : ndarray
+        One revolution of samples (``steps_per_rev`` rows), times following the start.
+    uncertainty : float
+        The last three extrapolations' largest difference over their change from
+        ``reference`` (above ``accuracy`` if ``max_iterates`` ran out).
+    iterates : int
+        Sector periods marched.
+    """
+    if steps_per_rev % n_sectors:
+        raise ValueError(f"steps_per_rev = {steps_per_rev} must be a multiple of the "
+                         f"{n_sectors} sectors")
+    m = steps_per_rev // n_sectors
+    sector = 2 * np.pi / omega / n_sectors  # s
+    step_once = stepper(integ, omega)
+    start = round(integ.t / sector)
+    t0 = start * sector
+    n_ref = round(2 * np.pi / omega / (reference[1, 0] - reference[0, 0]))
+    c_ref = referred_harmonics(reference[-n_ref:], omega, n_max)
+    scale_ref = np.abs(c_ref).max(axis=0)
+    live_ref = scale_ref > 0
+
+    def unfold(block: Array) -> Array:  # the fixed point's revolution from its aligned block
+        rev = np.concatenate([align(block, -(start + k + 1)) for k in range(n_sectors)])
+        rev[:, 0] = t0 + (np.arange(steps_per_rev) + 1) * (sector / m)
+        return rev
+
+    def relative(c: NDArray[np.complex128]) -> float:  # largest harmonic, relative to scale
+        return float(np.max(np.abs(c)[:, live_ref] / scale_ref[live_ref])) if np.any(
+            live_ref) else 0.0
+
+    blocks: list[Array] = []
+    estimates: list[tuple[Array, NDArray[np.complex128]]] = []
+    while True:
+        rows = []
+        for _ in range(m):
+            step_once()
+            rows.append(sample())
+        blocks.append(align(np.array(rows), round(integ.t / sector)))
+        if len(blocks) < 2:
+            continue
+        scale = np.abs(blocks[-1][:, 1:]).max(axis=0)
+        live = scale > 0
+        gamma, _ = rre_weights([b[:, 1:][:, live] / scale[live] for b in blocks])
+        rev = unfold(np.tensordot(gamma, np.array(blocks[1:]), axes=1))
+        estimates.append((rev, referred_harmonics(rev, omega, n_max)))
+        if len(estimates) < 3:
+            continue
+        # converged when the last three estimates agree: extrapolation's own residual is no
+        # measure of its error before the iterates span the slow modes
+        c = estimates[-1][1]
+        change = relative(c - c_ref)
+        spread = max(relative(c - estimates[-2][1]), relative(c - estimates[-3][1]))
+        uncertainty = spread / change if change > 0 else 0.0
+        if ((len(blocks) >= min_iterates and uncertainty <= accuracy)
+                or len(blocks) >= max_iterates):
+            return rev, uncertainty, len(blocks)

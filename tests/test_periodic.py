@@ -15,11 +15,13 @@ from studies.parameters import ParameterError
 from studies.periodic import (
     PARAMETERS,
     check,
+    coarser_steps,
     harmonic_change,
     march,
     rev_harmonics,
     richardson,
     rre_weights,
+    sector_response,
 )
 
 OMEGA = 2 * np.pi  # rad/s: one revolution per second
@@ -160,5 +162,97 @@ def test_richardson_removes_the_h2_term_exactly():
         # at h (column 0: |c_3| = ½ a h² against the fine mean 2 + 0.2 a h², with the
         # harmonics c_k of x = c_0 + 2 Re Σ c_k e^{ikψ})
         assert est[0] == pytest.approx(0.5 * a * h**2 / (2.0 + 0.2 * a * h**2), rel=1e-12)
-    with pytest.raises(ValueError, match="whole revolutions at h and 2h"):
+    # any coarser step: H = 1.6 h takes the h² term out with the factor 1/(1.6² − 1)
+    fine = _rows(N, 1, 3.0, lambda t: periodic_part(t) + a * h**2 * e(t))
+    coarse = _rows(40, 1, 2.0, lambda t: periodic_part(t) + a * (1.6 * h) ** 2 * e(t))
+    out, _ = richardson(fine, coarse, OMEGA, 8)
+    assert np.abs(out[:, 1:] - periodic_part(fine[:, 0])).max() < 1e-13
+    with pytest.raises(ValueError, match="at a coarser step with at least 18 samples"):
         richardson(fine, fine, OMEGA, 8)
+    with pytest.raises(ValueError, match="got 64 and 16 samples"):
+        richardson(fine, _rows(16, 1, 2.0, periodic_part), OMEGA, 8)
+
+
+def test_coarser_steps_resolve_the_harmonics():
+    assert coarser_steps(40, 4, 8) == 20  # twice the step
+    assert coarser_steps(44, 4, 8) == 20  # the largest multiple of the sectors below half
+    assert coarser_steps(36, 4, 8) is None  # 16 samples: harmonic 8 is the Nyquist one
+    assert coarser_steps(37, 1, 8) == 18
+
+
+class _Ring:
+    """A linear, periodically forced discrete system with a quarter-revolution symmetry,
+    stepped like an integrator: four damped oscillators (u_i + i w_i turns by 0.3 rad and
+    shrinks by 0.97 a step), oscillator i forced by f(ψ + iπ/2), f(ψ) = cos ψ + 0.3 sin 3ψ
+    + 0.2 cos 4ψ, so that oscillator i a quarter revolution later is oscillator i + 1 now,
+    and their sum (the 4P part) repeats every quarter revolution."""
+
+    def __init__(self, n: int, z0: np.ndarray) -> None:
+        self.h = 1.0 / n  # s (one revolution per second)
+        self.t, self.z, self.n_steps = 0.0, np.array(z0, dtype=complex), 0
+        self.mu = 0.97 * np.exp(0.3j)
+
+    def force(self, t: float) -> np.ndarray:
+        psi = OMEGA * t + np.arange(4) * np.pi / 2
+        return np.cos(psi) + 0.3 * np.sin(3 * psi) + 0.2 * np.cos(4 * psi)
+
+    def step(self):
+        self.t += self.h
+        self.z = self.mu * self.z + self.h * self.force(self.t)
+        self.n_steps += 1
+        return type("Info", (), {"converged": True, "message": ""})()
+
+    def sample(self) -> np.ndarray:
+        u = self.z.real
+        return np.concatenate([[self.t], [u.sum()], u])
+
+    def periodic(self, n: int) -> tuple[np.ndarray, np.ndarray]:
+        """The exact periodic state at t = 0 and one revolution of samples from it."""
+        g = np.zeros(4, dtype=complex)
+        for k in range(1, n + 1):  # one revolution from z = 0
+            g = self.mu * g + self.h * self.force(k * self.h)
+        z0 = g / (1 - self.mu**n)
+        ring = _Ring(n, z0)
+        rows = []
+        for _ in range(n):
+            ring.step()
+            rows.append(ring.sample())
+        return z0, np.array(rows)
+
+
+def _aligner(n_sectors: int):
+    """``align`` for the ring: a sector is 4/n_sectors quarter revolutions."""
+    def align(block: np.ndarray, j: int) -> np.ndarray:
+        out = block.copy()  # column 1 (the sum) repeats every quarter revolution
+        out[:, 2:] = np.roll(block[:, 2:], j * (4 // n_sectors), axis=1)
+        return out
+    return align
+
+
+@pytest.mark.parametrize("n_sectors", [4, 1])
+def test_sector_response_is_the_periodic_response_at_the_other_step(n_sectors):
+    """Started from the exact periodic state at twice the steps (as after shooting), the
+    extrapolated iterates of the quarter-revolution map (10 of them) or of the one-revolution
+    map (6) give this step's exact periodic revolution to roundoff (measured 1e-14 of the
+    change between the two steps); cut short, it says it is uncertain."""
+    n = 24
+    z_fine, fine = _Ring(2 * n, np.zeros(4)).periodic(2 * n)
+    _, exact = _Ring(n, np.zeros(4)).periodic(n)
+    change = np.abs(rev_harmonics(exact[:, 1:]) - rev_harmonics(fine[1::2, 1:])).max()
+    assert change > 0.1  # the two steps' responses differ
+
+    def run(max_iterates: int):
+        ring = _Ring(n, z_fine)
+        rev, uncertainty, iterates = sector_response(
+            ring, ring.sample, _aligner(n_sectors), n_sectors=n_sectors, steps_per_rev=n,
+            reference=fine, omega=OMEGA, accuracy=1e-8, max_iterates=max_iterates)
+        assert iterates == ring.n_steps * n_sectors // n
+        err = np.abs(rev_harmonics(rev[:, 1:]) - rev_harmonics(exact[:, 1:])).max()
+        return rev, uncertainty, iterates, err
+
+    rev, uncertainty, iterates, err = run(40)
+    assert uncertainty <= 1e-8 and iterates == {4: 10, 1: 6}[n_sectors]
+    assert err < 1e-12 * change
+    assert np.allclose(rev[:, 0], exact[:, 0], rtol=0, atol=1e-12)  # from the start
+    _, uncertainty, *_ = run(iterates - 2)
+    assert uncertainty > 1e-3
