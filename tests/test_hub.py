@@ -118,6 +118,9 @@ def test_hub_parameters_validated_before_running():
         SPEC.complete({"composition": "rk4"})
     with pytest.raises(ParameterError, match="must be a multiple of 4"):
         SPEC.complete({"steps_per_rev": 162, "richardson": False})
+    with pytest.raises(ParameterError, match="steps_per_rev = 32: must be at least 36 with "
+                                             "richardson"):
+        SPEC.complete({"steps_per_rev": 32, "richardson": True})
     with pytest.raises(ParameterError, match="must be a multiple of 2"):
         SPEC.complete({"steps_per_rev": 161, "shooting_window": 0, "richardson": True})
     with pytest.raises(ParameterError, match="shooting_window = 1"):
@@ -176,7 +179,7 @@ def test_default_step_gives_the_step_converged_harmonics_in_at_most_8_revolution
     ep, 40 steps/rev) is within 0.5 % of each signal's largest harmonic (measured 0.18 %;
     the plain ep at 160 steps/rev errs by 3.3 %) after 7.75 revolutions at the step,
     recorded ones included, and its stored step-error estimate is that error within 25 %
-    (measured 1.68e-3 against 1.83e-3); and the composed step is of order 4 on the
+    (measured 1.68e-3 against 1.9e-3); and the composed step is of order 4 on the
     harmonics: 24 → 48 steps/rev take the error from 1.4e-2 to 8.7e-4 (log2 ratio 3.98)."""
     from studies.hub import run
     from tests.test_symmetry import _harmonics
