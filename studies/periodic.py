@@ -604,10 +604,15 @@ def sector_response(integ, sample: Callable[[], Array], align: Callable[[Array, 
     if steps_per_rev % n_sectors:
         raise ValueError(f"steps_per_rev = {steps_per_rev} must be a multiple of the "
                          f"{n_sectors} sectors")
+    if max_iterates < 4:  # three extrapolations to compare need four iterates
+        raise ValueError(f"max_iterates = {max_iterates}: must be at least 4")
     m = steps_per_rev // n_sectors
     sector = 2 * np.pi / omega / n_sectors  # s
     step_once = stepper(integ, omega)
     start = round(integ.t / sector)
+    if abs(integ.t - start * sector) > 1e-9 * sector:
+        raise ValueError(f"the integrator's time {integ.t:.9g} s is not a whole sector period "
+                         f"({sector:.9g} s): the iterates' phases would not align")
     t0 = start * sector
     n_ref = round(2 * np.pi / omega / (reference[1, 0] - reference[0, 0]))
     c_ref = referred_harmonics(reference[-n_ref:], omega, n_max)

@@ -256,3 +256,12 @@ def test_sector_response_is_the_periodic_response_at_the_other_step(n_sectors):
     assert np.allclose(rev[:, 0], exact[:, 0], rtol=0, atol=1e-12)  # from the start
     _, uncertainty, *_ = run(iterates - 2)
     assert uncertainty > 1e-3
+    ring = _Ring(n, z_fine)
+    ring.step()  # off the sector boundary
+    with pytest.raises(ValueError, match="not a whole sector period"):
+        sector_response(ring, ring.sample, _aligner(n_sectors), n_sectors=n_sectors,
+                        steps_per_rev=n, reference=fine, omega=OMEGA)
+    with pytest.raises(ValueError, match="max_iterates = 3: must be at least 4"):
+        sector_response(_Ring(n, z_fine), ring.sample, _aligner(n_sectors),
+                        n_sectors=n_sectors, steps_per_rev=n, reference=fine, omega=OMEGA,
+                        max_iterates=3)
