@@ -28,19 +28,20 @@ quarter-revolution iterates are extrapolated to their fixed point and the model 
 it (:func:`studies.periodic.shoot`), 7.75 revolutions for a free case instead of 24 of plain
 marching. The time integration is the energy-preserving ``ep`` step, symmetric and of order
 2, composed into a fourth-order step (``composition``, default Suzuki's five substeps:
-:mod:`solver.composition`): at the default 40 steps/rev the harmonics 0–8 are within 0.18 %
-of the step-converged ones (the plain ``ep`` at 160 steps/rev: 3.3 %), at the cost of 200
-substeps per revolution.
+:mod:`solver.composition`): at the default 40 steps/rev the harmonics 0–8 are within 0.19 %
+of the step-converged ones on the free case (the plain ``ep`` at 160 steps/rev: 3.3 %), at
+the cost of 200 substeps per revolution, but 1.0 % at 3.3P tuning with 1.5 times the fuselage
+stiffness.
 
-Each run also estimates that error (``error_estimate``, default on): from the recorded run's
-end state, a few quarter revolutions at twice the step are extrapolated to that step's periodic
-response (:func:`studies.periodic.sector_response`; 1.5–3 revolutions at twice the step, the
-work of about one revolution at the step), and the harmonics 0–8 at the two steps give the
-estimate |c(h) − c(2h)|/15 (:func:`studies.periodic.richardson`; /3 for the plain step),
-stored as ``step_error_estimate``: 1.68e-3 on the free case against its measured 1.9e-3.
-With ``richardson`` the coarser response is found ten times tighter and the recorded
-harmonics 0–8 are extrapolated to zero step (the h⁴ term of a composed run or the h² term of
-a plain one taken out).
+So each run also computes the response at about twice the step: from the recorded run's end
+state, a few quarter revolutions at 2h are extrapolated to that step's periodic response
+(:func:`studies.periodic.sector_response`; 1.5–3.5 revolutions at 2h, the work of about one
+revolution at the step). The harmonics 0–8 at the two steps give the error estimate
+|c(h) − c(2h)|/15 (:func:`studies.periodic.richardson`; /3 for the plain step), stored as
+``step_error_estimate`` (``error_estimate``): 1.68e-3 on the free case against its measured
+1.9e-3, 8.0e-3 against 1.0e-2 in that corner. With ``richardson`` (default) the recorded
+harmonics 0–8 are extrapolated to zero step, the h⁴ term of a composed run or the h² term of
+a plain one taken out: 3.3e-4 and 2.5e-3 from the step-converged harmonics in those two cases.
 """
 
 from __future__ import annotations
@@ -72,11 +73,11 @@ Z = np.array([0.0, 0.0, 1.0])
 NEWTON_TOL = 1e-8  # relative Newton tolerance on q (m); see run()
 PLAIN_MIN_STEPS = 64  # steps per revolution at least, for the plain (uncomposed) ep step
 # relative accuracy of the coarser step's periodic harmonics against their change from the
-# recorded ones (studies.periodic.sector_response): the error estimate's own accuracy
+# recorded ones (studies.periodic.sector_response): the error estimate's own accuracy. The
+# extrapolated harmonics carry a 15th of it; measured, 0.01 instead made them no better (free
+# case 3.3e-4 → 2.3e-4 of the largest harmonic, 3.3P at 1.5× stiffness 2.5e-3 → 3.5e-3: the
+# O(h⁶) remainder and the periodicity tolerance dominate) for 1.75 more revolutions at 2h
 ESTIMATE_ACCURACY = 0.1
-# the same for richardson = true, whose extrapolated harmonics carry the coarser step's
-# harmonics' error divided by 2^p - 1 (Richardson's factor)
-RICHARDSON_ACCURACY = 0.01
 
 # UH-60-class values (public: 4 blades of 116.5 kg, R = 8.18 m, Ω = 27 rad/s). The hub mass,
 # shaft-head mass and fuselage restraint are assumptions: the fuselage in-plane mode at the hub
@@ -112,10 +113,11 @@ PARAMETERS: dict[str, Param] = {
                          "plain second-order ep step)", choices=(*COMPOSITIONS, "none")),
     "error_estimate": Param(True, "1", "estimate the time-step error of the harmonics 0-8 "
                             "from the periodic response at about twice the step (stored as "
-                            "step_error_estimate)"),
-    "richardson": Param(False, "1", "also extrapolate the harmonics 0-8 to zero step from the "
-                        "response at twice the time step (Richardson: error O(h^4) -> O(h^6) "
-                        "composed, O(h^2) -> O(h^4) plain), storing the error estimate"),
+                            "step_error_estimate; also made whenever richardson is true)"),
+    "richardson": Param(True, "1", "extrapolate the harmonics 0-8 to zero step from the "
+                        "response at about twice the time step (Richardson: error O(h^4) -> "
+                        "O(h^6) composed, O(h^2) -> O(h^4) plain), storing the error "
+                        "estimate; at least 40 steps/rev"),
     "revolutions": Param(2, "1", "whole revolutions recorded once periodic", minimum=1,
                          maximum=50),
     "max_revolutions": Param(80, "1", "revolutions allowed to reach a periodic response",
@@ -140,18 +142,12 @@ def check(p: dict[str, Any]) -> None:
         raise ParameterError(f"steps_per_rev = {p['steps_per_rev']}: must be at least "
                              f"{PLAIN_MIN_STEPS} with composition = 'none' (the plain "
                              "second-order step errs by 13 % at 80 steps/rev)")
-    # shooting steps whole quarter revolutions, at the step and, with richardson, twice it
-    multiple = N_BIFILARS * (2 if p["richardson"] else 1) if p["shooting_window"] else (
-        2 if p["richardson"] else 1)
-    if p["steps_per_rev"] % multiple:
+    # shooting steps whole quarter revolutions (the coarser step of the estimate too:
+    # periodic.coarser_steps)
+    if p["shooting_window"] and p["steps_per_rev"] % N_BIFILARS:
         raise ParameterError(f"steps_per_rev = {p['steps_per_rev']}: must be a multiple of "
-                             f"{multiple} (shooting on the quarter-revolution map steps whole "
-                             "quarter revolutions, Richardson also at twice the step)")
-    if p["richardson"] and periodic.coarser_steps(p["steps_per_rev"], multiple // 2,
-                                                  N_MAX) is None:
-        raise ParameterError(f"steps_per_rev = {p['steps_per_rev']}: must be at least "
-                             f"{4 * N_MAX + 4} with richardson = true (twice the step must "
-                             f"resolve harmonic {N_MAX})")
+                             f"{N_BIFILARS} (shooting on the quarter-revolution map steps whole "
+                             "quarter revolutions)")
 
 
 def build(p: dict[str, Any]):
@@ -264,32 +260,33 @@ def run(params: dict[str, Any]) -> xr.Dataset:
     notes = [rec.note] if rec.note else []
     step_error = float("nan")
     n_c = periodic.coarser_steps(nrev, n_sec, N_MAX)
+    extrapolated = False
     wanted = p["error_estimate"] or p["richardson"]
     if wanted and n_c is None:
-        notes.append(f"no step-error estimate at steps_per_rev = {nrev}: a coarser step would "
-                     f"not resolve harmonic {N_MAX}")
+        notes.append(f"no step-error estimate at steps_per_rev = {nrev}, harmonics not "
+                     f"extrapolated: a coarser step would not resolve harmonic {N_MAX}")
     elif wanted:
         # the periodic response at the coarser step, from the recorded one's end state: its
         # harmonics against the recorded ones estimate the time-step error (Richardson)
         coarse = integrator(n_c)
         coarse.restore(integ.state())
-        accuracy = RICHARDSON_ACCURACY if p["richardson"] else ESTIMATE_ACCURACY
         runs.append((coarse, n_c))
         try:
             rev, uncertainty, _ = sector_response(
                 coarse, sampler(coarse), align, n_sectors=n_sec, steps_per_rev=n_c,
-                reference=data, omega=omega, n_max=N_MAX, accuracy=accuracy,
-                max_iterates=(8 if p["richardson"] else 4) * max(n_sec, 2))
+                reference=data, omega=omega, n_max=N_MAX, accuracy=ESTIMATE_ACCURACY,
+                max_iterates=4 * max(n_sec, 2))
         except RuntimeError as exc:
-            notes.append(f"no step-error estimate: {exc}")
+            notes.append(f"no step-error estimate, harmonics not extrapolated: {exc}")
         else:
             corrected, est = richardson(data, rev, omega, N_MAX,
                                         order=2 if p["composition"] == "none" else 4)
             step_error = float(est.max())
-            if p["richardson"]:
-                data = corrected
-            if uncertainty > accuracy:
-                notes.append(f"step-error estimate uncertain by {uncertainty:.0%}")
+            if uncertainty > ESTIMATE_ACCURACY:
+                notes.append(f"step-error estimate uncertain by {uncertainty:.0%}" + (
+                    ", harmonics not extrapolated" if p["richardson"] else ""))
+            elif p["richardson"]:
+                data, extrapolated = corrected, True
     t = data[:, 0]
     x_rot, y_rot = to_rotating(omega, t, data[:, 1], data[:, 2])
     ds = SPEC.dataset({
@@ -313,7 +310,7 @@ def run(params: dict[str, Any]) -> xr.Dataset:
                     estimate_revolutions=float(sum(i.n_steps / n for i, n in runs[1:])),
                     estimate_samples_per_rev=int(n_c if len(runs) > 1 else 0),
                     shooting_restarts=int(rec.restarts),
-                    message="; ".join(notes), richardson=int(p["richardson"]),
+                    message="; ".join(notes), richardson=int(extrapolated),
                     step_error_estimate=step_error,
                     tuning_order_linear=float(holes.order_linear),
                     pin_damping=float(0.0 if p["bifilar"] == "locked" else pin_damping(p, holes)),

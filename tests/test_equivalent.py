@@ -275,7 +275,7 @@ def test_hub_equivalent_matches_full_bifilars_at_small_amplitude():
     from studies.hub import run
 
     common = {"excitation_3p": 300.0, "excitation_5p": 200.0, "pin_damping_ratio": 0.03,
-              "max_revolutions": 40, "error_estimate": False}
+              "max_revolutions": 40, "richardson": False, "error_estimate": False}
     full = run({"bifilar": "free", **common})
     eq = run({"bifilar": "equivalent", **common})
     a, b = _last_rev(full), _last_rev(eq)
