@@ -263,8 +263,9 @@ def run(params: dict[str, Any]) -> xr.Dataset:
     extrapolated = False
     wanted = p["error_estimate"] or p["richardson"]
     if wanted and n_c is None:
-        notes.append(f"no step-error estimate at steps_per_rev = {nrev}, harmonics not "
-                     f"extrapolated: a coarser step would not resolve harmonic {N_MAX}")
+        notes.append(f"no step-error estimate at steps_per_rev = {nrev}"
+                     + (", harmonics not extrapolated" if p["richardson"] else "")
+                     + f": a coarser step would not resolve harmonic {N_MAX}")
     elif wanted:
         # the periodic response at the coarser step, from the recorded one's end state: its
         # harmonics against the recorded ones estimate the time-step error (Richardson)
@@ -277,7 +278,9 @@ def run(params: dict[str, Any]) -> xr.Dataset:
                 reference=data, omega=omega, n_max=N_MAX, accuracy=ESTIMATE_ACCURACY,
                 max_iterates=4 * max(n_sec, 2))
         except RuntimeError as exc:
-            notes.append(f"no step-error estimate, harmonics not extrapolated: {exc}")
+            notes.append("no step-error estimate"
+                         + (", harmonics not extrapolated" if p["richardson"] else "")
+                         + f": {exc}")
         else:
             corrected, est = richardson(data, rev, omega, N_MAX,
                                         order=2 if p["composition"] == "none" else 4)
