@@ -29,8 +29,10 @@ NEWTON_MAXITER = 30  # Maximum number of Newton iterations per step.
 SLOW_RATE = 0.25  # Contraction rate above which the LU factors are refreshed.
 STALE_RATE = 0.02  # Rate above which factors from an earlier step are not worth keeping.
 STALE_ITERATIONS = 4  # Iterations after which factors from an earlier step are refreshed.
-# Updates that stop shrinking while within 1/ROUNDOFF_FLOOR of the tolerance are roundoff noise
-# (the KKT matrix's condition number times machine precision), not divergence.
+# Updates that stop shrinking, with a Newton matrix of the current iterate, while within
+# 1/ROUNDOFF_FLOOR of the tolerance are roundoff noise (the KKT matrix's condition number times
+# machine precision), not divergence. With factors kept from an earlier matrix, slow shrinking
+# only means the factors are stale: those are refreshed instead (see newton()).
 ROUNDOFF_FLOOR = 1e-5
 # LU pivots smaller than this times the largest are zero: a singular matrix (measured: the
 # rotor's Newton matrices 1.7e-9, a rotation with no inertia and no joint 7e-18)
@@ -172,8 +174,12 @@ def newton(residual: Callable[[NDArray], NDArray], jacobian: Callable[[NDArray],
         x += dx
         err = error(dx)
         rate = size / prev if math.isfinite(prev) and prev > 0 else 0.0
-        # converged, or stagnating at the roundoff floor (tiny updates that no longer shrink)
-        done = err <= tol or (rate > 0.5 and err * ROUNDOFF_FLOOR <= tol)
+        # converged, or stagnating at the roundoff floor: updates that no longer shrink
+        # although the factors are of a matrix from this call. Kept factors that contract
+        # slowly are stale, and their update says nothing of roundoff: accepting it stopped
+        # the rotor's steps with errors up to 5e4 times the tolerance, a few steps per
+        # revolution (noise that made its shooting fail at looser tolerances)
+        done = err <= tol or (fresh and rate > 0.5 and err * ROUNDOFF_FLOOR <= tol)
         if full:
             if done:
                 return NewtonResult(x, True, it, nfact)
