@@ -121,12 +121,17 @@ Z = np.array([0.0, 0.0, 1.0])
 N_BLADES = 4
 FT = 0.3048  # m
 # Newton's tolerance on the updates of q, relative to q's scale (its largest coordinate, a
-# wake state of about 25 m/s): 2.5e-6 m or m/s. Measured on the free case, from rest over two
-# revolutions against Newton solved to 1e-12: the positions differ by 1.1e-5 m, 180 times less
-# than the time step's own error there (2.0e-3 m, 240 against 480 steps/rev); a settled
-# revolution takes 2.8 instead of 4.7 iterations per step (1e-10). Shooting reaches the same
-# periodic response at 1e-6 too (same revolutions, Table 1 cases 1, 3, 4).
+# wake state of about 25 m/s), at NEWTON_STEPS steps per revolution: 2.5e-6 m or m/s a step.
+# Measured on the free case from rest over two revolutions against Newton solved to 1e-12: the
+# positions differ by 1.1e-5 m, 180 times less than the time step's own error (2.0e-3 m, 240
+# against 480 steps/rev); a settled revolution takes 2.8 instead of 4.7 iterations per step
+# (1e-10). Shooting reaches the same periodic response at 1e-6 too (Table 1 cases 1, 3, 4).
+# Finer steps need it tighter: Newton's error per step adds up over the 1/h steps while the
+# scheme's error falls as h², so the ratio holds with a tolerance in h³ (newton_tolerance). At
+# 480 steps/rev 1e-7 left the free case's harmonics changing by 3 % after 80 revolutions;
+# 1.25e-8 (h³) and 1e-8 shoot to periodic, as 2.96e-8 does at 360.
 NEWTON_TOL = 1e-7
+NEWTON_STEPS = 240
 
 PARAMETERS: dict[str, Param] = {
     **ABSORBERS,
@@ -449,15 +454,24 @@ class _Sampler:
                          *np.degrees(phis)])
 
 
+def newton_tolerance(steps_per_rev: int) -> float:
+    """Newton's relative tolerance at ``steps_per_rev``: :data:`NEWTON_TOL` up to
+    :data:`NEWTON_STEPS`, then falling as h³ (see :data:`NEWTON_TOL`)."""
+    return NEWTON_TOL * min(1.0, (NEWTON_STEPS / steps_per_rev) ** 3)
+
+
 def integrator(system: System, p: dict[str, Any], h: float, parts: RotorParts | None = None,
-               book_work: bool = False, tol: float = NEWTON_TOL) -> Integrator:
+               book_work: bool = False, tol: float | None = None) -> Integrator:
     """The time integrator ``p`` asks for, with step ``h`` (s); ρ∞ applies to ``galpha``.
     Given the model's ``parts``, the Newton factors kept from step to step turn with the hub
     and blades (:func:`turning`). The work of the loads is booked only with ``book_work`` (an
     energy check): a case reads none, and booking it costs a force evaluation per step.
-    ``tol``: Newton's relative tolerance (:data:`NEWTON_TOL`)."""
+    ``tol``: Newton's relative tolerance (default :func:`newton_tolerance` of the steps per
+    revolution)."""
     rho = p["rho_inf"] if p["scheme"] == "galpha" else None
     spin = None if parts is None else turning(system, parts, p["hub_speed"])
+    if tol is None:
+        tol = newton_tolerance(p["steps_per_rev"])
     return make_integrator(system, p["scheme"], h, rho_inf=rho, tol=tol,
                            book_work=book_work, turning=spin)
 

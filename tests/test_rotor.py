@@ -293,3 +293,13 @@ def test_table1_trends(tmp_path):
     # at 240 steps/rev): tens of percent
     assert np.all(np.abs(ratio(soft, "hub_force_fixed", 4) - 1) >= 0.1)
     assert np.all(np.abs(ratio(soft, "hub_force_fixed", 4) - 1) <= 0.9)
+
+
+def test_newton_tolerance_falls_as_h_cubed_above_the_default_step():
+    """Newton's tolerance is 1e-7 up to 240 steps/rev and falls as h³ beyond (Newton's error
+    adds up over 1/h steps while the scheme's falls as h²): 1.25e-8 at 480, where 1e-7 left
+    the free case's harmonics changing by 3 % after 80 revolutions."""
+    from studies.rotor import newton_tolerance
+
+    assert newton_tolerance(120) == newton_tolerance(240) == 1e-7
+    assert math.isclose(newton_tolerance(480), 1.25e-8, rel_tol=1e-12)
