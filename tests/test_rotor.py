@@ -209,7 +209,7 @@ def test_kept_factors_turned_with_the_rotor():
     assert plain > 0.3 and with_turn < 0.25 * plain, (plain, with_turn)
     # the same 60 steps from the same state: fresh factors every step, turned ones, and
     # fresh ones with Newton solved a hundred times tighter (the reference)
-    # (at Newton's tolerance of 1e-10, a hundred times below the cases': the comparison is of
+    # (at Newton's tolerance of 1e-10, a thousand times below the cases': the comparison is of
     # the turned factors, not of the default tolerance)
     runs = []
     for parts_, tol in ((None, 1e-10), (parts, 1e-10), (None, 1e-12)):
