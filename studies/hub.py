@@ -262,10 +262,11 @@ def run(params: dict[str, Any]) -> xr.Dataset:
     n_c = periodic.coarser_steps(nrev, n_sec, N_MAX)
     extrapolated = False
     wanted = p["error_estimate"] or p["richardson"]
+    # what a case message adds when the estimate fails: the extrapolation, if it was asked for
+    unextrapolated = ", harmonics not extrapolated" if p["richardson"] else ""
     if wanted and n_c is None:
-        notes.append(f"no step-error estimate at steps_per_rev = {nrev}"
-                     + (", harmonics not extrapolated" if p["richardson"] else "")
-                     + f": a coarser step would not resolve harmonic {N_MAX}")
+        notes.append(f"no step-error estimate at steps_per_rev = {nrev}{unextrapolated}: a "
+                     f"coarser step would not resolve harmonic {N_MAX}")
     elif wanted:
         # the periodic response at the coarser step, from the recorded one's end state: its
         # harmonics against the recorded ones estimate the time-step error (Richardson)
@@ -278,16 +279,14 @@ def run(params: dict[str, Any]) -> xr.Dataset:
                 reference=data, omega=omega, n_max=N_MAX, accuracy=ESTIMATE_ACCURACY,
                 max_iterates=4 * max(n_sec, 2))
         except RuntimeError as exc:
-            notes.append("no step-error estimate"
-                         + (", harmonics not extrapolated" if p["richardson"] else "")
-                         + f": {exc}")
+            notes.append(f"no step-error estimate{unextrapolated}: {exc}")
         else:
             corrected, est = richardson(data, rev, omega, N_MAX,
                                         order=2 if p["composition"] == "none" else 4)
             step_error = float(est.max())
             if uncertainty > ESTIMATE_ACCURACY:
-                notes.append(f"step-error estimate uncertain by {uncertainty:.0%}" + (
-                    ", harmonics not extrapolated" if p["richardson"] else ""))
+                notes.append(f"step-error estimate uncertain by {uncertainty:.0%}"
+                             f"{unextrapolated}")
             elif p["richardson"]:
                 data, extrapolated = corrected, True
     t = data[:, 0]
