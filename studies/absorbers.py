@@ -11,9 +11,11 @@ models archive with the same names and units.
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from solver.model import Model
 from studies.bifilar import HARDWARE, BifilarParts, add_bifilar, pin_angle
@@ -23,12 +25,14 @@ from studies.equivalent import (
     equivalent_absorber,
     equivalent_cm,
     equivalent_pin_angles,
+    particle_state,
 )
 from studies.holes import Geometry, Holes, design
 from studies.parameters import Output, Param
 
 N_BIFILARS = 4
 FIRST_ANGLE = np.pi / 4  # bifilar 0 at 45° from blade 0
+AZIMUTHS = FIRST_ANGLE + 2 * np.pi * np.arange(N_BIFILARS) / N_BIFILARS  # at t = 0 (rad)
 
 PARAMETERS: dict[str, Param] = {
     "bifilar": Param("free", "1", "bifilar tuning masses free, locked to the hub, or replaced "
@@ -102,22 +106,39 @@ def pin_damping(p: dict[str, Any], holes: Holes) -> float:
     return 2.0 * p["pin_damping_ratio"] * omega * m_eff * (g.pin_diameter / d_hole) ** 2
 
 
-def add_absorbers(model: Model, hub, carrier, holes: Holes,
-                  p: dict[str, Any]) -> list[BifilarParts] | EquivalentParts:
-    """The four absorbers on ``hub`` (spinning at ``hub_speed`` about +z, centre at the origin,
-    frame = identity at t = 0) as ``p["bifilar"]`` says; the equivalent's particle rides on
-    ``carrier`` (non-rotating, d3 the rotor axis). Returns the bifilars' parts or the
-    equivalent's."""
+@dataclass(frozen=True)
+class AbsorberStart:
+    """The absorbers' state at t = 0: each bifilar's pin angle and its rate (rad, rad/s; the
+    equivalent's particle carries their cyclic whirl), and the hub centre's position and
+    velocity (m, m/s, global). The default is at rest at the vertex, the hub centre at the
+    origin."""
+
+    angles: NDArray[np.float64] = field(default_factory=lambda: np.zeros(N_BIFILARS))
+    rates: NDArray[np.float64] = field(default_factory=lambda: np.zeros(N_BIFILARS))
+    center: NDArray[np.float64] = field(default_factory=lambda: np.zeros(3))
+    velocity: NDArray[np.float64] = field(default_factory=lambda: np.zeros(3))
+
+
+def add_absorbers(model: Model, hub, carrier, holes: Holes, p: dict[str, Any],
+                  start: AbsorberStart | None = None) -> list[BifilarParts] | EquivalentParts:
+    """The four absorbers on ``hub`` (spinning at ``hub_speed`` about +z, frame = identity at
+    t = 0, centre and state as ``start`` says) as ``p["bifilar"]`` says; the equivalent's
+    particle rides on ``carrier`` (non-rotating, d3 the rotor axis). Returns the bifilars'
+    parts or the equivalent's."""
     omega = p["hub_speed"]
+    s = start if start is not None else AbsorberStart()
     if p["bifilar"] == "equivalent":
         # the same rolling resistance, as swing damping
         absorber = equivalent_absorber(holes, N_BIFILARS, pin_damping(p, holes))
-        return add_equivalent(model, carrier, hub, np.zeros(3), absorber, omega,
-                              first_angle=FIRST_ANGLE)
+        w0, wd0 = particle_state(absorber, omega, s.angles, s.rates, AZIMUTHS)
+        return add_equivalent(model, carrier, hub, s.center, absorber, omega,
+                              first_angle=FIRST_ANGLE, displacement=w0, rate=wd0)
     locked = p["bifilar"] == "locked"
     cp = 0.0 if locked else pin_damping(p, holes)
-    return [add_bifilar(model, hub, holes, 0.0, angle=FIRST_ANGLE + i * np.pi / 2,
-                        prefix=f"b{i}_", omega=omega, locked=locked, pin_damping=cp)
+    return [add_bifilar(model, hub, holes, 0.0 if locked else s.angles[i], angle=AZIMUTHS[i],
+                        prefix=f"b{i}_", omega=omega, locked=locked, pin_damping=cp,
+                        hub_center=s.center, hub_velocity=s.velocity,
+                        rate=0.0 if locked else s.rates[i])
             for i in range(N_BIFILARS)]
 
 

@@ -141,51 +141,84 @@ class BifilarParts:
     locked: bool
 
 
-def add_bifilar(model: Model, hub, holes: Holes, amplitude: float, angle: float = 0.0,
-                prefix: str = "", omega: float = 0.0, locked: bool = False,
-                pin_damping: float = 0.0, hub_center=(0.0, 0.0, 0.0)) -> BifilarParts:
-    """Add one bifilar to ``model`` on ``hub`` (whose frame is the identity at t = 0).
-
-    ``angle`` (rad) places the bifilar's radial line about z; ``amplitude`` (rad) is the release
-    angle; ``omega`` (rad/s) the hub speed for initial velocities (at rest relative to the hub);
-    ``locked`` clamps the tuning mass and the pins to the hub (the paper's case 0).
-    """
-    g = holes.geometry
-    q = rotation_about(Z, angle)
-    c0 = np.asarray(hub_center, dtype=float)
-    sig = holes.sigma_of_angle(amplitude)
+def _pose(holes: Holes, sig: float, q: np.ndarray, c0: np.ndarray) -> dict[str, Any]:
+    """The bifilar's configuration at path parameter ``sig`` (global, hub frame = identity,
+    bifilar rotation ``q``, hub centre ``c0``): the tuning mass's centre of mass, the pin centre,
+    the contact points a1, a2 with the holes' Frenet triads r1, r2 there and their curve
+    parameters."""
 
     def glob(p2):  # bifilar-frame 2-D point -> global 3-D
         return c0 + q @ np.array([p2[0], p2[1], 0.0])
 
-    def vel(x):
-        return np.cross(omega * Z, x - c0)
-
-    w = omega * Z
     cm = glob(holes.path(np.array([sig]))[0])
     pin_c = glob(holes.pin_center(sig))
-    jp = 2.0 * g.pin_inertia
-    mass = RigidBody(f"{prefix}mass", g.tuning_mass, inertia=(0.0, 0.0, 0.0), position=cm,
-                     orientation=q, velocity=vel(cm), angular_velocity=w)
-    pin = RigidBody(f"{prefix}pin", 2.0 * g.pin_mass, inertia=(0.5 * jp, 0.5 * jp, jp),
-                    position=pin_c, orientation=q, velocity=vel(pin_c), angular_velocity=w)
-    if locked:
-        model.add(mass, pin, Rigid(f"{prefix}lock", hub, mass, point=cm),
-                  Rigid(f"{prefix}pinlock", hub, pin, point=pin_c))
-        return BifilarParts(angle, holes, mass, pin, None, None, True)
     eta1 = holes.c1.closest_eta(np.array([*holes.hole_point(sig)[0], 0.0]))
     a1 = c0 + q @ holes.c1.point(eta1)
-    r1 = q @ holes.c1.frame(eta1)[0]
     # contact on the tuning mass's hole: diametrically opposite a1 on the pin (|P − a1| = d/2),
     # in the mass's frame (= the bifilar frame at t = 0)
     b_loc = q.T @ (2.0 * pin_c - a1 - cm)
     eta2 = holes.c2.closest_eta(b_loc)
-    a2 = cm + q @ holes.c2.point(eta2)
-    r2 = q @ holes.c2.frame(eta2)[0]
-    link1 = RigidBody(f"{prefix}link1", 0.0, position=a1, orientation=r1, velocity=vel(a1),
-                      angular_velocity=w)
-    link2 = RigidBody(f"{prefix}link2", 0.0, position=a2, orientation=r2, velocity=vel(a2),
-                      angular_velocity=w)
+    return {"cm": cm, "pin": pin_c, "a1": a1, "r1": q @ holes.c1.frame(eta1)[0], "eta1": eta1,
+            "a2": cm + q @ holes.c2.point(eta2), "r2": q @ holes.c2.frame(eta2)[0],
+            "eta2": eta2}
+
+
+def add_bifilar(model: Model, hub, holes: Holes, amplitude: float, angle: float = 0.0,
+                prefix: str = "", omega: float = 0.0, locked: bool = False,
+                pin_damping: float = 0.0, hub_center=(0.0, 0.0, 0.0), rate: float = 0.0,
+                hub_velocity=(0.0, 0.0, 0.0)) -> BifilarParts:
+    """Add one bifilar to ``model`` on ``hub`` (whose frame is the identity at t = 0).
+
+    ``angle`` (rad) places the bifilar's radial line about z; ``amplitude`` (rad) is the pin
+    angle at t = 0 and ``rate`` (rad/s) its rate; ``omega`` (rad/s) the hub speed and
+    ``hub_center``, ``hub_velocity`` (m, m/s, global) the position and velocity of the hub
+    centre at t = 0, for the initial velocities (with ``rate`` = 0: at rest relative to the
+    hub); ``locked`` clamps the tuning mass and the pins to the hub (the paper's case 0).
+    """
+    g = holes.geometry
+    q = rotation_about(Z, angle)
+    c0 = np.asarray(hub_center, dtype=float)
+    v0 = np.asarray(hub_velocity, dtype=float)
+    w = omega * Z
+    sig = holes.sigma_of_angle(amplitude)
+    pose = _pose(holes, sig, q, c0)
+    cm, pin_c = pose["cm"], pose["pin"]
+    # velocities relative to the hub: the swing's, by central differences of the same
+    # configuration in the path parameter (σ̇ = (dσ/dφ) φ̇); the links turn with their
+    # triads, and the pin spins so that it rolls on the arm's hole (its contact point at rest
+    # on the hub: v_P + ω ẑ × (a1 − P) = 0)
+    rel = dict.fromkeys(("cm", "pin", "a1", "a2"), np.zeros(3))
+    spin = dict.fromkeys(("r1", "r2", "pin"), 0.0)
+    if rate and not locked:
+        dphi = 1e-6
+        sdot = (holes.sigma_of_angle(amplitude + dphi)
+                - holes.sigma_of_angle(amplitude - dphi)) / (2 * dphi) * rate
+        ds = 1e-6
+        hi, lo = _pose(holes, sig + ds, q, c0), _pose(holes, sig - ds, q, c0)
+        rel = {k: (hi[k] - lo[k]) / (2 * ds) * sdot for k in rel}
+        for k in ("r1", "r2"):  # z component of the triad's turn rate: (ṙ rᵀ)[1, 0]
+            spin[k] = float(((hi[k] - lo[k]) / (2 * ds) @ pose[k].T)[1, 0] * sdot)
+        arm = pose["a1"] - pose["pin"]
+        spin["pin"] = -float(np.cross(arm, rel["pin"])[2] / (arm @ arm))
+
+    def vel(x, key=None):  # hub centre's velocity + rotation about it + the swing
+        return v0 + np.cross(w, x - c0) + (rel[key] if key else 0.0)
+
+    jp = 2.0 * g.pin_inertia
+    mass = RigidBody(f"{prefix}mass", g.tuning_mass, inertia=(0.0, 0.0, 0.0), position=cm,
+                     orientation=q, velocity=vel(cm, "cm"), angular_velocity=w)
+    pin = RigidBody(f"{prefix}pin", 2.0 * g.pin_mass, inertia=(0.5 * jp, 0.5 * jp, jp),
+                    position=pin_c, orientation=q, velocity=vel(pin_c, "pin"),
+                    angular_velocity=w + spin["pin"] * Z)
+    if locked:
+        model.add(mass, pin, Rigid(f"{prefix}lock", hub, mass, point=cm),
+                  Rigid(f"{prefix}pinlock", hub, pin, point=pin_c))
+        return BifilarParts(angle, holes, mass, pin, None, None, True)
+    a1, a2, eta1, eta2 = pose["a1"], pose["a2"], pose["eta1"], pose["eta2"]
+    link1 = RigidBody(f"{prefix}link1", 0.0, position=a1, orientation=pose["r1"],
+                      velocity=vel(a1, "a1"), angular_velocity=w + spin["r1"] * Z)
+    link2 = RigidBody(f"{prefix}link2", 0.0, position=a2, orientation=pose["r2"],
+                      velocity=vel(a2, "a2"), angular_velocity=w + spin["r2"] * Z)
     # the arm's hole, placed on the hub by the bifilar's rotation (one curve for all bifilars)
     j1 = CurveSliding(f"{prefix}slide1", hub, holes.c1, link1, point=a1, eta0=eta1,
                       rotation=True, placement=(q, c0 * 0.0))

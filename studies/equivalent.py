@@ -208,13 +208,23 @@ class EquivalentAbsorber:
         (ñ + 1)Ω and regressive (ñ − 1)Ω (a negative value whirls progressively)."""
         return (self.order + 1.0) * hub_speed, (self.order - 1.0) * hub_speed
 
-    def apparent_mass(self, hub_speed: float, whirl: float | ArrayLike) -> complex | NDArray:
-        """M_eff (kg, complex) with F = M_eff ω² z for the carrier whirling as z = Z e^{iωt}
-        at the signed frequency ω = ``whirl`` (rad/s; > 0 progressive, < 0 regressive)."""
+    def swing_response(self, hub_speed: float, whirl: float | ArrayLike) -> complex | NDArray:
+        """Â/Z (rad/m, complex): the swing's whirl amplitude A = Â e^{iωt} (φ_k = Re(A e^{−iψ_k}))
+        per unit carrier displacement for the carrier whirling as z = Z e^{iωt} at the signed
+        frequency ω = ``whirl`` (rad/s; > 0 progressive, < 0 regressive), from the A equation:
+        (J (ñ²Ω² − (ω − Ω)²) + i c_φ (ω − Ω)) Â = −i B ω² Z."""
         w = np.asarray(whirl, dtype=float)
         rel = w - hub_speed
-        den = (self.order * hub_speed) ** 2 - rel**2 + 1j * self.swing_damping / self.inertia * rel
-        return self.total_mass + self.effective_mass * w**2 / den
+        den = (self.inertia * ((self.order * hub_speed) ** 2 - rel**2)
+               + 1j * self.swing_damping * rel)
+        return -1j * self.coupling * w**2 / den
+
+    def apparent_mass(self, hub_speed: float, whirl: float | ArrayLike) -> complex | NDArray:
+        """M_eff (kg, complex) with F = M_eff ω² z for the carrier whirling as z = Z e^{iωt}
+        at the signed frequency ω = ``whirl`` (rad/s; > 0 progressive, < 0 regressive):
+        F = −M z̈ − i B (N/2) Ä, i.e. M_eff = M + i B (N/2) Â/Z (:meth:`swing_response`)."""
+        return (self.total_mass + 0.5j * self.n_absorbers * self.coupling
+                * self.swing_response(hub_speed, whirl))
 
 
 def equivalent_absorber(holes: Holes, n_absorbers: int, pin_damping: float) -> EquivalentAbsorber:
@@ -311,7 +321,8 @@ def _velocity0(body: Body, point: Array) -> tuple[Array, Array]:
 
 def add_equivalent(model: Model, carrier: Body, hub: Body | None, center: ArrayLike,
                    absorber: EquivalentAbsorber, omega: float, prefix: str = "eq_",
-                   first_angle: float = np.pi / 4) -> EquivalentParts:
+                   first_angle: float = np.pi / 4, displacement: ArrayLike = (0.0, 0.0),
+                   rate: ArrayLike = (0.0, 0.0)) -> EquivalentParts:
     """Add the equivalent absorber of N bifilars to ``model``.
 
     Parameters
@@ -339,6 +350,9 @@ def add_equivalent(model: Model, carrier: Body, hub: Body | None, center: ArrayL
     first_angle
         α_0 (rad): azimuth of bifilar 0's radial line from the hub's (t = 0: the carrier's) d1;
         the others follow at 2π/N. Only the reconstructed pin angles depend on it.
+    displacement, rate
+        w and ẇ (m, m/s) at t = 0 in the carrier's axes (d1, d2): the particle's start
+        relative to the hub centre, e.g. :func:`particle_state` of given pin angles and rates.
 
     Returns
     -------
@@ -358,22 +372,32 @@ def add_equivalent(model: Model, carrier: Body, hub: Body | None, center: ArrayL
     c0 = np.asarray(center, dtype=float).reshape(-1)
     if c0.shape != (3,) or not np.all(np.isfinite(c0)):
         raise ValueError(f"center = {center!r} must be 3 finite numbers (m)")
+    start = []
+    for name, value in (("displacement", displacement), ("rate", rate)):
+        a = np.asarray(value, dtype=float).reshape(-1)
+        if a.shape != (2,) or not np.all(np.isfinite(a)):
+            raise ValueError(f"{name} = {value!r} must be 2 finite numbers (carrier axes d1, d2)")
+        start.append(np.array([a[0], a[1], 0.0]))
     omega = float(omega)
     xc, rc = _pose0(carrier)
     axis = rc[:, 2]
     center_local = rc.T @ (c0 - xc)
-    vel, _ = _velocity0(carrier, c0)
+    vel, w_carrier = _velocity0(carrier, c0)
     ab = absorber
     m_e, c_e = ab.effective_mass, ab.particle_damping
-    # the particle: translates in the carrier's plane, turns with it
-    particle = RigidBody(f"{prefix}particle", m_e, inertia=(0.0, 0.0, 0.0), position=c0,
-                         velocity=vel)
+    # the particle: translates in the carrier's plane, turns with it; w is read in the
+    # carrier's axes, so its global rate adds the carrier's turn of it
+    w0, wd0 = rc @ start[0], rc @ start[1]
+    particle = RigidBody(f"{prefix}particle", m_e, inertia=(0.0, 0.0, 0.0), position=c0 + w0,
+                         velocity=vel + np.cross(w_carrier, w0) + wd0)
     # spring k I, rotating damper −c_e (ẇ − Ω ẑ×w) and gyroscopic 2 m_e Ω ẑ×ẇ, in the
-    # carrier's axes: f = −K w − C ẇ
+    # carrier's axes: f = −K w − C ẇ. The coupling's point is the hub centre c0 on both
+    # bodies, so on the particle it sits −w0 from the particle: Δ = w − w0, and the spring is
+    # unstretched at w = 0 with the rest value −w0
     k_mat = ab.stiffness(omega) * np.diag([1.0, 1.0, 0.0]) - c_e * omega * _ZX
     c_mat = c_e * np.diag([1.0, 1.0, 0.0]) - 2.0 * m_e * omega * _ZX
     coupling = FrameCoupling(f"{prefix}coupling", carrier, particle, frame=carrier, point=c0,
-                             stiffness=k_mat, damping=c_mat, rest=np.zeros(3))
+                             stiffness=k_mat, damping=c_mat, rest=-start[0])
     elements: list = [particle,
                       Planar(f"{prefix}plane", carrier, particle, point=c0, axis=axis),
                       Orientation(f"{prefix}noturn", carrier, particle, point=c0, axis=axis,
@@ -447,6 +471,21 @@ def equivalent_cm(system, parts: EquivalentParts, q: Array, t: float | None = No
     :func:`equivalent_pin_angles`)."""
     rc, p = _carrier_axes(system, parts, q)
     return p + parts.absorber.cm_gain * (rc[:, :2] @ particle_displacement(system, parts, q))
+
+
+def particle_state(absorber: EquivalentAbsorber, hub_speed: float,
+                   pin_angles: Sequence[float] | Array, pin_rates: Sequence[float] | Array,
+                   azimuths: Array) -> tuple[Array, Array]:
+    """w and ẇ (m, m/s; the carrier's axes d1, d2) of the particle carrying the cyclic whirl of
+    the pin angles φ_k and rates φ̇_k (rad, rad/s) of bifilars at azimuths ψ_k (rad): the
+    inverse of :func:`equivalent_pin_angles`. With A = (2/N) Σ φ_k e^{iψ_k}
+    (:func:`whirl_amplitude`) and φ̇_k = Re((Ȧ − iΩA) e^{−iψ_k}), Ȧ = (2/N) Σ φ̇_k e^{iψ_k}
+    + iΩA; w = i (J/B) A."""
+    a = whirl_amplitude(pin_angles, azimuths)
+    adot = whirl_amplitude(pin_rates, azimuths) + 1j * hub_speed * a
+    gain = 1j * absorber.inertia / absorber.coupling
+    return (np.array([(gain * a).real, (gain * a).imag]),
+            np.array([(gain * adot).real, (gain * adot).imag]))
 
 
 def whirl_amplitude(pin_angles: Sequence[float] | Array, azimuths: Array) -> complex:

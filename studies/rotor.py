@@ -193,7 +193,7 @@ PARAMETERS: dict[str, Param] = {
                                 "revolutions, relative to the largest", minimum=0.0,
                                 exclusive_minimum=True, maximum=1.0),
     **periodic.PARAMETERS,
-    **periodic.SHOOTING,
+    **periodic.shooting_parameters(window=12),
 }
 
 # Nominal fuselage-beam section other than bending: axial, shear and torsion stiff (vertical

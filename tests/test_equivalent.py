@@ -302,11 +302,14 @@ def test_hub_equivalent_matches_full_bifilars_at_small_amplitude():
 
 def test_hub_equivalent_model_layout():
     """The equivalent hub model: shaft (2) + particle (2) degrees of freedom, the same total
-    mass, and the reconstructed outputs at rest."""
+    mass, and the reconstructed outputs at rest; started from the hub's linear start, the
+    particle carries the start's pin angles and rates back (``particle_state`` inverts
+    ``equivalent_pin_angles``) and the declared velocities satisfy every constraint."""
+    from solver.integrators import project_velocities
     from studies.equivalent import EquivalentParts, equivalent_cm, equivalent_pin_angles
-    from studies.hub import SPEC, build
+    from studies.hub import SPEC, build, linear_start
 
-    p = SPEC.complete({"bifilar": "equivalent"})
+    p = SPEC.complete({"bifilar": "equivalent", "initial_state": "rest"})
     model, *_, parts, _holes, _kc = build(p)
     assert isinstance(parts, EquivalentParts)
     s = System(model)
@@ -317,6 +320,22 @@ def test_hub_equivalent_model_layout():
     q = s.q0_raw
     np.testing.assert_allclose(equivalent_pin_angles(s, parts, q, 0.0), 0.0, atol=1e-15)
     np.testing.assert_allclose(equivalent_cm(s, parts, q, 0.0), 0.0, atol=1e-15)
+
+    p = SPEC.complete({"bifilar": "equivalent"})
+    model, _hub, shaft, parts, holes, _kc = build(p)
+    start = linear_start(p, holes)
+    assert np.abs(start.angles).max() > 0.01 and np.abs(start.center).max() > 1e-5
+    s = System(model)
+    q, v = s.q0_raw, s._v_declared
+    assert np.abs(project_velocities(s, q, v, 0.0) - v).max() < 1e-12 * np.abs(v).max()
+    np.testing.assert_allclose(equivalent_pin_angles(s, parts, q, 0.0), start.angles,
+                               rtol=1e-12, atol=1e-15)
+    eps = 1e-6  # rates by central differences along the declared velocities (q is affine)
+    rates = (equivalent_pin_angles(s, parts, q + eps * v, eps)
+             - equivalent_pin_angles(s, parts, q - eps * v, -eps)) / (2 * eps)
+    np.testing.assert_allclose(rates, start.rates, rtol=1e-6)
+    o = s.offset[shaft]
+    np.testing.assert_allclose(q[o : o + 3], start.center, rtol=1e-15)
 
 
 # ------------------------------------------------------------------ bad input (test 4)
