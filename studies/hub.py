@@ -24,27 +24,29 @@ same harmonics within ``periodic_tolerance``. Whole revolutions are then recorde
 
 The run starts from the closed-form periodic response of the linearized model
 (``initial_state``, :func:`linear_response`: the bifilars as their fixed-frame equivalent, the
-hub's whirl and their swing), so only what the linearization leaves out is transient. The
-periodic response is then reached by shooting on the quarter-revolution map (the model is
-symmetric under a quarter turn of the hub with the bifilars permuted, :func:`symmetry`): the
-quarter-revolution iterates are extrapolated to their fixed point and the model restarts from
-it (:func:`studies.periodic.shoot`), 4.5 revolutions for a free case (7.75 from rest, 24 from
-rest by plain marching). The time integration is the energy-preserving ``ep`` step, symmetric and of order
-2, composed into a fourth-order step (``composition``, default Suzuki's five substeps:
-:mod:`solver.composition`): at the default 40 steps/rev the harmonics 0–8 are within 0.19 %
-of the step-converged ones on the free case (the plain ``ep`` at 160 steps/rev: 3.3 %), at
-the cost of 200 substeps per revolution, but 1.0 % at 3.3P tuning with 1.5 times the fuselage
-stiffness.
+hub's whirl and their swing), so only what the linearization leaves out is transient: the
+first two revolutions of a free case differ by 0.9 % (81 % from rest). The periodic response
+is then reached by shooting on the quarter-revolution map (the model is symmetric under a
+quarter turn of the hub with the bifilars permuted, :func:`symmetry`): the quarter-revolution
+iterates are extrapolated to their fixed point and the model restarts from it
+(:func:`studies.periodic.shoot`), 4.5 revolutions for a free case, recorded ones included
+(7.75 from rest, 24 by plain marching). The time integration is the energy-preserving ``ep``
+step, symmetric and of order 2, composed into a fourth-order step (``composition``, default
+Suzuki's five substeps: :mod:`solver.composition`): at the default 40 steps/rev the harmonics
+0–8 are within 0.18 % of the step-converged ones on the free case (the plain ``ep`` at 160
+steps/rev: 3.3 %), at the cost of 200 substeps per revolution, but 0.92 % at 3.3P tuning with
+1.5 times the fuselage stiffness.
 
 So each run also computes the response at about twice the step: from the recorded run's end
 state, a few quarter revolutions at 2h are extrapolated to that step's periodic response
 (:func:`studies.periodic.sector_response`; 1.5–3.5 revolutions at 2h, the work of about one
 revolution at the step). The harmonics 0–8 at the two steps give the error estimate
 |c(h) − c(2h)|/15 (:func:`studies.periodic.richardson`; /3 for the plain step), stored as
-``step_error_estimate`` (``error_estimate``): 1.68e-3 on the free case against its measured
-1.9e-3, 8.0e-3 against 1.0e-2 in that corner. With ``richardson`` (default) the recorded
+``step_error_estimate`` (``error_estimate``): 1.69e-3 on the free case against its measured
+1.84e-3, 7.9e-3 against 9.2e-3 in that corner. With ``richardson`` (default) the recorded
 harmonics 0–8 are extrapolated to zero step, the h⁴ term of a composed run or the h² term of
-a plain one taken out: 3.3e-4 and 2.5e-3 from the step-converged harmonics in those two cases.
+a plain one taken out: 1.9e-4 and 1.6e-3 from the step-converged harmonics in those two cases.
+A free case simulates 7.0 revolutions in all (4.5 at the step, 2.5 at 2h).
 """
 
 from __future__ import annotations
