@@ -579,10 +579,8 @@ class GeneralizedAlpha(Integrator):
         vf, anew = self._rates(dq) if self._rates_used else (None, None)
         c, gf = s.constraint_and_jacobian(qf, self._tf)
         r1 = s.mass_mul(dq) + self._mconst
-        if len(self.first):
-            rate = np.zeros(s.n)
-            rate[self.first] = vf[self.first]
-            r1 += sc * s.first_mass_mul(rate)
+        if len(self.first):  # A has only the first-order states' columns: A v_f is A ẋ_f
+            r1 += sc * s.first_mass_mul(vf)
         load = s.gradient(qf)
         if s.force_sets:  # else f = 0, and ∇V − 0 is ∇V to the bit
             load = load - s.applied(qf, vf, self._tf, self._acc(anew))
