@@ -208,16 +208,23 @@ class EquivalentAbsorber:
         (ñ + 1)Ω and regressive (ñ − 1)Ω (a negative value whirls progressively)."""
         return (self.order + 1.0) * hub_speed, (self.order - 1.0) * hub_speed
 
+    def swing_terms(self, hub_speed: float, whirl: float | ArrayLike) -> tuple:
+        """(S, D), complex, with Â/Z = S/D (:meth:`swing_response`): S = −i B ω² (kg·m/s²) and
+        D = J (ñ²Ω² − (ω − Ω)²) + i c_φ (ω − Ω) (N·m), apart so that a caller can clear the
+        denominator, which vanishes for an undamped absorber tuned to the whirl."""
+        w = np.asarray(whirl, dtype=float)
+        rel = w - hub_speed
+        den = (self.inertia * ((self.order * hub_speed) ** 2 - rel**2)
+               + 1j * self.swing_damping * rel)
+        return -1j * self.coupling * w**2, den
+
     def swing_response(self, hub_speed: float, whirl: float | ArrayLike) -> complex | NDArray:
         """Â/Z (rad/m, complex): the swing's whirl amplitude A = Â e^{iωt} (φ_k = Re(A e^{−iψ_k}))
         per unit carrier displacement for the carrier whirling as z = Z e^{iωt} at the signed
         frequency ω = ``whirl`` (rad/s; > 0 progressive, < 0 regressive), from the A equation:
         (J (ñ²Ω² − (ω − Ω)²) + i c_φ (ω − Ω)) Â = −i B ω² Z."""
-        w = np.asarray(whirl, dtype=float)
-        rel = w - hub_speed
-        den = (self.inertia * ((self.order * hub_speed) ** 2 - rel**2)
-               + 1j * self.swing_damping * rel)
-        return -1j * self.coupling * w**2 / den
+        num, den = self.swing_terms(hub_speed, whirl)
+        return num / den
 
     def apparent_mass(self, hub_speed: float, whirl: float | ArrayLike) -> complex | NDArray:
         """M_eff (kg, complex) with F = M_eff ω² z for the carrier whirling as z = Z e^{iωt}

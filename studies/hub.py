@@ -92,6 +92,9 @@ PLAIN_MIN_STEPS = 64  # steps per revolution at least, for the plain (uncomposed
 # case 3.3e-4 → 2.3e-4 of the largest harmonic, 3.3P at 1.5× stiffness 2.5e-3 → 3.5e-3: the
 # O(h⁶) remainder and the periodicity tolerance dominate) for 1.75 more revolutions at 2h
 ESTIMATE_ACCURACY = 0.1
+# the largest pin angle from which the linear start is used (rad): the linearization drops the
+# amplitude detuning, φ²/16 of the frequency for circular holes (1.7 % at 30°)
+LINEAR_START_LIMIT = np.radians(30.0)
 
 # UH-60-class values (public: 4 blades of 116.5 kg, R = 8.18 m, Ω = 27 rad/s). The hub mass,
 # shaft-head mass and fuselage restraint are assumptions: the fuselage in-plane mode at the hub
@@ -198,20 +201,26 @@ def linear_response(p: dict[str, Any], holes) -> tuple[np.ndarray, np.ndarray, n
     A = Σ Â e^{iωt}, φ_k = Re(A e^{−iψ_k})).
 
     At small swing the four bifilars act on the hub as their fixed-frame equivalent
-    (:mod:`studies.equivalent`): an apparent mass M_eff(ω) under a hub whirl at ω (locked:
-    their total mass). Each tone F e^{iωt} of the shears then moves the hub by
-    Z = F / (k + iωc − ω² (m_shaft + m_rotor + M_eff(ω))), and the bifilars swing with
-    Â = (Â/Z) Z (:meth:`~studies.equivalent.EquivalentAbsorber.swing_response`).
+    (:mod:`studies.equivalent`): an apparent mass M_eff(ω) = M + i B (N/2) S/D under a hub
+    whirl at ω, Â/Z = S/D (:meth:`~studies.equivalent.EquivalentAbsorber.swing_terms`; locked:
+    the total mass M). Each tone F e^{iωt} of the shears then moves the hub by
+    Z = F / (K0 − ω² (M_eff − M)), K0 = k + iωc − ω² (m_shaft + m_rotor + M), computed with D
+    cleared, Z = F D / Δ and Â = F S / Δ with Δ = D K0 − i ω² B (N/2) S: finite also for an
+    undamped absorber tuned to a tone (D = 0), which then cancels it (Z = 0,
+    Â = 2iF/(ω² N B)). Not finite only at an undamped resonance of the coupled system.
     """
     omega = p["hub_speed"]
     whirl, force = excitation(p)
     k, c = fuselage(p)
     locked = p["bifilar"] == "locked"
     absorber = equivalent_absorber(holes, N_BIFILARS, 0.0 if locked else pin_damping(p, holes))
-    m_abs = absorber.total_mass if locked else absorber.apparent_mass(omega, whirl)
-    zz = force / (k + 1j * whirl * c - whirl**2 * (p["shaft_mass"] + p["rotor_mass"] + m_abs))
-    aa = 0.0 * zz if locked else absorber.swing_response(omega, whirl) * zz
-    return whirl, zz, aa
+    k0 = k + 1j * whirl * c - whirl**2 * (p["shaft_mass"] + p["rotor_mass"]
+                                          + absorber.total_mass)
+    if locked:
+        return whirl, force / k0, np.zeros(len(whirl), dtype=complex)
+    num, den = absorber.swing_terms(omega, whirl)
+    delta = den * k0 - 0.5j * N_BIFILARS * absorber.coupling * whirl**2 * num
+    return whirl, force * den / delta, force * num / delta
 
 
 def linear_start(p: dict[str, Any], holes) -> AbsorberStart:
@@ -229,13 +238,41 @@ def linear_start(p: dict[str, Any], holes) -> AbsorberStart:
                          velocity=np.array([zd0.real, zd0.imag, 0.0]))
 
 
+def initial_start(p: dict[str, Any], holes) -> tuple[AbsorberStart, str]:
+    """The state the run starts from as ``initial_state`` says, and what the case message
+    should say about it: the linear start only where the linearization holds — finite, and
+    every pin within :data:`LINEAR_START_LIMIT` and on its hole — else rest."""
+    if p["initial_state"] == "rest":
+        return AbsorberStart(), ""
+    with np.errstate(all="ignore"):  # a non-finite response is reported, not warned about
+        start = linear_start(p, holes)
+    values = np.concatenate([start.angles, start.rates, start.center, start.velocity])
+    if not np.all(np.isfinite(values)):
+        return AbsorberStart(), ("started at rest: the linear response is not finite (an "
+                                 "undamped resonance of the linearized hub)")
+    big = float(np.abs(start.angles).max())
+    reach = ""
+    if big > LINEAR_START_LIMIT:
+        reach = f"beyond the {np.degrees(LINEAR_START_LIMIT):g}° where the linearization holds"
+    else:
+        try:
+            for a in (big, -big):
+                holes.sigma_of_angle(a)
+        except ParameterError:
+            reach = "beyond the end of the holes"
+    if reach:
+        return AbsorberStart(), (f"started at rest: the linear response swings the pins to "
+                                 f"{np.degrees(big):.3g}°, {reach}")
+    return start, ""
+
+
 def build(p: dict[str, Any]):
     """The hub model: (model, hub, shaft, parts, holes, (k, c)) with handles for outputs;
     ``parts`` is the list of :class:`BifilarParts` or, for ``bifilar = "equivalent"``, the
     :class:`studies.equivalent.EquivalentParts`. It starts as ``initial_state`` says."""
     omega = p["hub_speed"]
     holes = holes_for(p)
-    start = linear_start(p, holes) if p["initial_state"] == "linear" else AbsorberStart()
+    start, _ = initial_start(p, holes)
     x0, v0 = start.center, start.velocity
     g0 = ground()
     shaft = RigidBody("shaft", p["shaft_mass"], inertia=(1.0, 1.0, 1.0), position=x0,
@@ -334,7 +371,9 @@ def run(params: dict[str, Any]) -> xr.Dataset:
                     window=p["extrapolation_window"])
     data = rec.samples
     runs = [(integ, nrev)]
-    notes = [rec.note] if rec.note else []
+    # the start that build() used, and whether the case message should say it was rest
+    _, start_note = initial_start(p, holes)
+    notes = [note for note in (start_note, rec.note) if note]
     step_error = float("nan")
     n_c = periodic.coarser_steps(nrev, n_sec, N_MAX)
     extrapolated = False

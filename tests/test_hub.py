@@ -164,6 +164,43 @@ def test_linear_response_is_the_linear_models_periodic_response(bifilar):
     np.testing.assert_allclose(tones @ a / n, aa, rtol=0, atol=1e-3 * np.abs(aa).max())
 
 
+def test_undamped_tuned_bifilars_cancel_their_tone_in_the_linear_response():
+    """Without damping, bifilars tuned to the rotating 3P (the fixed-frame progressive 4P
+    whirl) have an infinite apparent mass at it: the closed form, written with the swing's
+    denominator cleared, gives the exact limit — no hub motion at that tone and the swing
+    whose force cancels the shear, Â = 2iF/(ω² N B) — and is continuous in the damping."""
+    from studies.equivalent import equivalent_absorber
+    from studies.hub import excitation, holes_for, linear_response
+
+    p = SPEC.complete({"pin_damping_ratio": 0.0})
+    holes = holes_for(p)
+    whirl, zz, aa = linear_response(p, holes)
+    _, force = excitation(p)
+    b = equivalent_absorber(holes, 4, 0.0).coupling
+    assert abs(zz[0]) <= 1e-12 * abs(zz[1])
+    assert aa[0] == pytest.approx(2j * force[0] / (whirl[0] ** 2 * 4 * b), rel=1e-12)
+    _, zz_d, aa_d = linear_response(SPEC.complete({"pin_damping_ratio": 1e-7}), holes)
+    np.testing.assert_allclose(aa_d, aa, rtol=1e-5)
+    assert abs(zz_d[0]) < 1e-5 * abs(zz[1])
+
+
+def test_linear_start_only_where_the_linearization_holds(monkeypatch):
+    """A linear response that swings the pins beyond 30° (the amplitude detuning the
+    linearization drops is 1.7 % there) is not used: the run starts at rest and its case
+    message says why."""
+    from studies import hub
+
+    p = SPEC.complete({"excitation_3p": 3e4})  # 20 times the default: 77° of swing
+    start, note = hub.initial_start(p, hub.holes_for(p))
+    assert not np.any(start.angles) and not np.any(start.center)
+    assert note == ("started at rest: the linear response swings the pins to 77.2°, beyond "
+                    "the 30° where the linearization holds")
+    monkeypatch.setattr(hub, "LINEAR_START_LIMIT", np.radians(1.0))
+    ds = hub.run({"error_estimate": False, "richardson": False})
+    assert ds.attrs["message"].startswith("started at rest: the linear response swings the "
+                                          "pins to 3.42°, beyond the 1° where")
+
+
 def test_linear_start_is_nearly_periodic():
     """Started from the linear response, the nonlinear bifilars' first two marched revolutions
     differ by 0.9 % of the largest harmonics (what the linearization leaves out); started at
