@@ -184,25 +184,22 @@ def add_bifilar(model: Model, hub, holes: Holes, amplitude: float, angle: float 
     pose = _pose(holes, sig, q, c0)
     cm, pin_c = pose["cm"], pose["pin"]
     # velocities relative to the hub: the swing's, by central differences of the same
-    # configuration in the path parameter (σ̇ = (dσ/dφ) φ̇); the links turn with their
-    # triads, and the pin spins so that it rolls on the arm's hole (its contact point at rest
-    # on the hub: v_P + ω ẑ × (a1 − P) = 0)
+    # configuration in the pin angle; the links turn with their triads, and the pin spins so
+    # that it rolls on the arm's hole (its contact point at rest on the hub:
+    # v_P + ω ẑ × (a1 − P) = 0)
     rel = dict.fromkeys(("cm", "pin", "a1", "a2"), np.zeros(3))
     spin = dict.fromkeys(("r1", "r2", "pin"), 0.0)
     if rate and not locked:
-        dphi = 1e-6
-        sdot = (holes.sigma_of_angle(amplitude + dphi)
-                - holes.sigma_of_angle(amplitude - dphi)) / (2 * dphi) * rate
-        ds = 1e-6
-        hi, lo = _pose(holes, sig + ds, q, c0), _pose(holes, sig - ds, q, c0)
-        rel = {k: (hi[k] - lo[k]) / (2 * ds) * sdot for k in rel}
+        d = 1e-6  # rad
+        hi, lo = (_pose(holes, holes.sigma_of_angle(amplitude + e), q, c0) for e in (d, -d))
+        rel = {k: (hi[k] - lo[k]) * (rate / (2 * d)) for k in rel}
         for k in ("r1", "r2"):  # z component of the triad's turn rate: (ṙ rᵀ)[1, 0]
-            spin[k] = float(((hi[k] - lo[k]) / (2 * ds) @ pose[k].T)[1, 0] * sdot)
+            spin[k] = float(((hi[k] - lo[k]) @ pose[k].T)[1, 0] * (rate / (2 * d)))
         arm = pose["a1"] - pose["pin"]
         spin["pin"] = -float(np.cross(arm, rel["pin"])[2] / (arm @ arm))
 
-    def vel(x, key=None):  # hub centre's velocity + rotation about it + the swing
-        return v0 + np.cross(w, x - c0) + (rel[key] if key else 0.0)
+    def vel(x, key):  # hub centre's velocity + rotation about it + the swing
+        return v0 + np.cross(w, x - c0) + rel[key]
 
     jp = 2.0 * g.pin_inertia
     mass = RigidBody(f"{prefix}mass", g.tuning_mass, inertia=(0.0, 0.0, 0.0), position=cm,

@@ -266,13 +266,15 @@ def initial_start(p: dict[str, Any], holes) -> tuple[AbsorberStart, str]:
     return start, ""
 
 
-def build(p: dict[str, Any]):
+def build(p: dict[str, Any], holes=None, start: AbsorberStart | None = None):
     """The hub model: (model, hub, shaft, parts, holes, (k, c)) with handles for outputs;
     ``parts`` is the list of :class:`BifilarParts` or, for ``bifilar = "equivalent"``, the
-    :class:`studies.equivalent.EquivalentParts`. It starts as ``initial_state`` says."""
+    :class:`studies.equivalent.EquivalentParts`. ``holes`` and ``start`` (the state at t = 0)
+    default to :func:`studies.absorbers.holes_for` and :func:`initial_start`'s."""
     omega = p["hub_speed"]
-    holes = holes_for(p)
-    start, _ = initial_start(p, holes)
+    holes = holes_for(p) if holes is None else holes
+    if start is None:
+        start, _ = initial_start(p, holes)
     x0, v0 = start.center, start.velocity
     g0 = ground()
     shaft = RigidBody("shaft", p["shaft_mass"], inertia=(1.0, 1.0, 1.0), position=x0,
@@ -309,7 +311,10 @@ def run(params: dict[str, Any]) -> xr.Dataset:
     estimate the harmonics' time-step error from the periodic response at a coarser step
     and, with ``richardson``, extrapolate them to zero step (see the module docstring)."""
     p = SPEC.complete(params)
-    model, hub, shaft, parts, holes, (k, c) = build(p)
+    holes = holes_for(p)
+    # the start, and what the case message says of it (that it is rest, and why)
+    start, start_note = initial_start(p, holes)
+    model, hub, shaft, parts, holes, (k, c) = build(p, holes, start)
     omega = p["hub_speed"]
     nrev = p["steps_per_rev"]
     sysm = System(model)
@@ -371,8 +376,6 @@ def run(params: dict[str, Any]) -> xr.Dataset:
                     window=p["extrapolation_window"])
     data = rec.samples
     runs = [(integ, nrev)]
-    # the start that build() used, and whether the case message should say it was rest
-    _, start_note = initial_start(p, holes)
     notes = [note for note in (start_note, rec.note) if note]
     step_error = float("nan")
     n_c = periodic.coarser_steps(nrev, n_sec, N_MAX)
