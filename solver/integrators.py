@@ -37,10 +37,17 @@ from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from solver.jit import njit
-from solver.newton import STALE_ITERATIONS, STALE_RATE, LinearSolver, max_abs, newton
+from solver.newton import (
+    STALE_ITERATIONS,
+    STALE_RATE,
+    LinearSolver,
+    max_abs,
+    max_abs_weighted,
+    newton,
+)
 from solver.system import BLOCKS, System, _scatter_add, csc_pattern
 from solver.turning import TurningParts
 
@@ -169,13 +176,30 @@ class Tangent:
     k_vals: Array | None = None  # stiffness block values, if not the Hessian at q
 
 
+def _error_weights(scale: ArrayLike | None, n: int) -> Array | None:
+    """1/``tolerance_scale`` per unknown (None: all ones, the plain maximum norm)."""
+    if scale is None:
+        return None
+    s = np.asarray(scale, dtype=float)
+    if s.shape != (n,):
+        raise ValueError(f"tolerance_scale must be {n} numbers (one per unknown of q), got "
+                         f"shape {s.shape}")
+    bad = np.nonzero(~(np.isfinite(s) & (s > 0)))[0]
+    if bad.size:
+        raise ValueError(f"tolerance_scale[{bad[0]}] = {float(s[bad[0]])!r} must be finite and > 0")
+    return 1.0 / s
+
+
 class Integrator:
     """Template: state (t, q, v, λ, ν), Newton, counters and energy bookkeeping.
 
     Schemes implement ``_begin`` (constants of the step), ``_start`` (the plain predictor of
     x = (Δq, μ, ν)), ``_residual(x)``, ``_tangent_weights(x)`` and ``_finish(x)``.
 
-    ``tol`` is Newton's tolerance on the updates of q relative to q's scale; ``book_work``
+    ``tol`` is Newton's tolerance on the updates of q relative to q's scale;
+    ``tolerance_scale`` (n,), if given, multiplies that tolerance per unknown of q (> 0: a
+    state judged in other units than the scale's, e.g. a stiff first-order state that the
+    loads see beside velocities); ``book_work``
     false leaves the work of loads and drivers unbooked (``work`` is then NaN);
     ``turning`` (:class:`solver.turning.TurningParts`) names the parts that spin at a known
     rate, with which LU factors kept from step to step are turned.
@@ -189,12 +213,14 @@ class Integrator:
     def __init__(self, system: System, h: float, t0: float = 0.0, q0: Array | None = None,
                  v0: Array | None = None, reuse_jacobian: bool = True,
                  tol: float = CONSTRAINT_TOL, book_work: bool = True,
-                 turning: TurningParts | None = None) -> None:
+                 turning: TurningParts | None = None,
+                 tolerance_scale: ArrayLike | None = None) -> None:
         if not (np.isfinite(h) and h > 0):
             raise ValueError(f"time step h = {h!r} s must be > 0")
         if not (0 < tol < 1e-3):
             raise ValueError(f"Newton tolerance tol = {tol!r} must be in (0, 1e-3)")
         self.tol = float(tol)
+        self._weights = _error_weights(tolerance_scale, system.n)
         self.sys = system
         self.h = float(h)
         self.t = float(t0)
@@ -263,9 +289,12 @@ class Integrator:
         return self.sys.kinetic(v) + self.sys.potential(q)
 
     def _error(self, dx: Array) -> float:
-        """Size of a Newton update of x: the largest change of the kinematic unknowns (Newton
-        stops when it is at most ``tol`` times the scale of q)."""
-        return max_abs(dx[: self._nk])
+        """Size of a Newton update of x: the largest change of the kinematic unknowns, each
+        divided by its ``tolerance_scale`` (Newton stops when it is at most ``tol`` times the
+        scale of q)."""
+        if self._weights is None:
+            return max_abs(dx[: self._nk])
+        return max_abs_weighted(dx, self._weights, self._nk // self.sys.n)
 
     _full = False
     _stale_failures = 0

@@ -129,6 +129,22 @@ def max_abs(x: NDArray) -> float:
     return m
 
 
+@njit(cache=True)
+def max_abs_weighted(x: NDArray, w: NDArray, stages: int) -> float:
+    """max |xᵢ wᵢ| over the first ``stages`` blocks of len(w) entries of x (w repeated in
+    each), NaN if one of them is NaN: :func:`max_abs` with a weight per unknown."""
+    n = len(w)
+    m = 0.0
+    for s in range(stages):
+        for i in range(n):
+            a = abs(x[s * n + i]) * w[i]
+            if a != a:
+                return a
+            if a > m:
+                m = a
+    return m
+
+
 def newton(residual: Callable[[NDArray], NDArray], jacobian: Callable[[NDArray], object],
            x0: NDArray, error: Callable[[NDArray], float], tol: float, solver: LinearSolver,
            reuse: bool = True, full: bool = False, estimate: bool = False,

@@ -5,9 +5,10 @@ roundoff floor only where that floor is real."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 import scipy.sparse as sp
 
-from solver.newton import ROUNDOFF_FLOOR, LinearSolver, max_abs, newton
+from solver.newton import ROUNDOFF_FLOOR, LinearSolver, max_abs, max_abs_weighted, newton
 
 A = sp.csc_matrix(np.array([[4.0, 1.0, 0.0], [1.0, 3.0, 1.0], [0.0, 1.0, 2.0]]))
 B = np.array([1.0, -2.0, 0.5])
@@ -61,3 +62,35 @@ def test_kept_factors_that_contract_fast_are_kept():
                  estimate=True)
     assert res.converged and res.factorizations == 0, res
     assert max_abs(res.x - X) <= TOL
+
+
+def test_weighted_error_is_the_weighted_maximum_norm():
+    """max_abs_weighted is max |xᵢ wᵢ| over the stages' blocks (w repeated per stage), NaN
+    when an entry is: Newton's size of an update with a tolerance per unknown."""
+    rng = np.random.default_rng(3)
+    w = rng.uniform(0.01, 1.0, 5)
+    x = rng.standard_normal(13)  # two stages of 5 and three multipliers, which are not judged
+    assert max_abs_weighted(x, w, 1) == np.abs(x[:5] * w).max()
+    assert max_abs_weighted(x, w, 2) == np.abs(x[:10] * np.tile(w, 2)).max()
+    x[7] = np.nan
+    assert np.isnan(max_abs_weighted(x, w, 2)) and not np.isnan(max_abs_weighted(x, w, 1))
+
+
+@pytest.mark.parametrize("scale, match", [
+    (np.ones(2), r"3 numbers \(one per unknown of q\), got shape \(2,\)"),
+    ([1.0, 0.0, 1.0], r"tolerance_scale\[1\] = 0.0"),
+    ([1.0, 1.0, np.inf], r"tolerance_scale\[2\] = inf")])
+def test_tolerance_scale_is_validated(scale, match):
+    """A tolerance per unknown of q: one finite positive number each, else an error naming
+    the entry."""
+    from solver.bodies import PointMass
+    from solver.forces import Spring
+    from solver.integrators import make_integrator
+    from solver.model import Model
+    from solver.system import System
+
+    mod = Model()
+    p = PointMass("mass", 1.0, position=(1.0, 0.0, 0.0))
+    mod.add(p, Spring("s", None, p, point=(1.0, 0.0, 0.0), stiffness=10.0))
+    with pytest.raises(ValueError, match=match):
+        make_integrator(System(mod), "galpha", 0.01, tolerance_scale=scale)

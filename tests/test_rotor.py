@@ -209,11 +209,11 @@ def test_kept_factors_turned_with_the_rotor():
     assert plain > 0.3 and with_turn < 0.25 * plain, (plain, with_turn)
     # the same 60 steps from the same state: fresh factors every step, turned ones, and
     # fresh ones with Newton solved a hundred times tighter (the reference)
-    # (at Newton's tolerance of 1e-10, a thousand times below the cases': the comparison is of
-    # the turned factors, not of the default tolerance)
+    # (at Newton's tolerance of 1e-10, a thousand times below the cases', the same for every
+    # unknown: the comparison is of the turned factors, not of the default tolerance)
     runs = []
     for parts_, tol in ((None, 1e-10), (parts, 1e-10), (None, 1e-12)):
-        run = integrator(System(model), p, h, parts_, tol=tol)
+        run = integrator(System(model), p, h, parts_, tol=tol, wake_tolerance=1.0)
         run.restore(integ.state())
         for _ in range(60):
             assert run.step().converged
@@ -303,3 +303,21 @@ def test_newton_tolerance_falls_as_h_cubed_above_the_default_step():
 
     assert newton_tolerance(120) == newton_tolerance(240) == 1e-7
     assert math.isclose(newton_tolerance(480), 1.25e-8, rel_tol=1e-12)
+
+
+def test_wake_states_are_judged_on_their_own_tolerance():
+    """Newton judges the lifting lines' wake states (m/s) on WAKE_TOLERANCE times the
+    tolerance of the other unknowns (the velocity error the positions' tolerance admits is
+    γ/(βh) = 1.9e3 /s times theirs), and only them."""
+    from studies.rotor import WAKE_TOLERANCE, build, integrator
+
+    p = SPEC.complete({})
+    model, parts = build(p)
+    system = System(model)
+    integ = integrator(system, p, 2 * np.pi / p["hub_speed"] / p["steps_per_rev"], parts)
+    wake = np.zeros(system.n, dtype=bool)
+    wake[_line_set(system, parts.lines[0]).state_idx.ravel()] = True
+    assert wake.sum() == sum(ln.wake_states * ln.n_sections for ln in parts.lines) > 0
+    np.testing.assert_array_equal(integ._weights, np.where(wake, 1 / WAKE_TOLERANCE, 1.0))
+    # still far tighter than the velocities the loads add them to (measured 1.9e3 /s)
+    assert 50 * WAKE_TOLERANCE <= integ.gamma / (integ.beta * integ.h) <= 2.5e3
