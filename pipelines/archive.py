@@ -96,7 +96,7 @@ RESERVED_NAMES = frozenset(
     {"case", "case_name", "case_id", "status", "message", "harmonic", "direction",
      "time_in_rev", "psi", "sample", "time", "run_hub_speed", "run_revolutions",
      "run_transient_revolutions", "run_samples_per_rev", "run_wall_time",
-     "run_step_error_estimate"}
+     "run_step_error_estimate", "run_simulated_revolutions"}
 )
 
 
@@ -229,7 +229,7 @@ def case_summary(ds: xr.Dataset, spec: ModelSpec, n_max: int = N_MAX) -> xr.Data
         the declared histories over the last recorded revolution (dim ``time_in_rev``,
         coordinate ``psi`` in degree, starting at psi = 0), ``run_hub_speed`` (rad s-1),
         ``run_revolutions``, ``run_samples_per_rev``, ``run_transient_revolutions`` and, for a
-        run that estimated it, ``run_step_error_estimate``.
+        run that reports them, ``run_simulated_revolutions`` and ``run_step_error_estimate``.
         Otherwise: the declared histories whole (dim ``sample``) with their ``time`` (s).
         Every variable has the ``units`` and ``long_name`` of its declaration.
 
@@ -267,6 +267,12 @@ def case_summary(ds: xr.Dataset, spec: ModelSpec, n_max: int = N_MAX) -> xr.Data
             out["run_transient_revolutions"] = (
                 (), np.int32(ds.attrs["transient_revolutions"]),
                 {"units": "1", "long_name": "revolutions simulated before recording"},
+            )
+        if "simulated_revolutions" in ds.attrs:
+            out["run_simulated_revolutions"] = (
+                (), float(ds.attrs["simulated_revolutions"]),
+                {"units": "1", "long_name": "revolutions simulated in all: transient, recorded "
+                 "and those of the step-error estimate's coarser step"},
             )
         if np.isfinite(ds.attrs.get("step_error_estimate", np.nan)):
             extrapolated = bool(ds.attrs.get("richardson", 0))

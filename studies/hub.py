@@ -34,19 +34,24 @@ iterates are extrapolated to their fixed point and the model restarts from it
 step, symmetric and of order 2, composed into a fourth-order step (``composition``, default
 Suzuki's five substeps: :mod:`solver.composition`): at the default 40 steps/rev the harmonics
 0–8 are within 0.18 % of the step-converged ones on the free case (the plain ``ep`` at 160
-steps/rev: 3.3 %), at the cost of 200 substeps per revolution, but 0.92 % at 3.3P tuning with
+steps/rev: 3.3 %), at the cost of 200 substeps per revolution, but 0.89 % at 3.3P tuning with
 1.5 times the fuselage stiffness.
 
 So each run also computes the response at about twice the step: from the recorded run's end
 state, a few quarter revolutions at 2h are extrapolated to that step's periodic response
-(:func:`studies.periodic.sector_response`; 1.5–4.25 revolutions at 2h, the work of about
-one or two revolutions at the step). The harmonics 0–8 at the two steps give the error estimate
-|c(h) − c(2h)|/15 (:func:`studies.periodic.richardson`; /3 for the plain step), stored as
-``step_error_estimate`` (``error_estimate``): 1.69e-3 on the free case against its measured
-1.84e-3, 7.9e-3 against 9.2e-3 in that corner. With ``richardson`` (default) the recorded
+(:func:`studies.periodic.sector_response`). The slow modes the coarse iterates relax along
+are those shooting extrapolated at the step, so its iterates (the record's ``iterates``) give
+the secant pairs of a Newton step to that response from the second coarse iterate on: 1–2
+revolutions at 2h, where the coarse iterates alone needed 2.5–4.25 to span the slow modes.
+The harmonics 0–8 at the two steps give the error estimate |c(h) − c(2h)|/15
+(:func:`studies.periodic.richardson`; /3 for the plain step), stored as
+``step_error_estimate`` (``error_estimate``): 1.70e-3 on the free case against its measured
+1.85e-3, 8.1e-3 against 8.9e-3 in that corner. With ``richardson`` (default) the recorded
 harmonics 0–8 are extrapolated to zero step, the h⁴ term of a composed run or the h² term of
-a plain one taken out: 1.9e-4 and 1.6e-3 from the step-converged harmonics in those two cases.
-A free case simulates 7.0 revolutions in all (4.5 at the step, 2.5 at 2h).
+a plain one taken out: 1.7e-4 and 1.0e-3 from the step-converged harmonics in those two cases.
+A free case simulates 6.5 revolutions in all (4.5 at the step, 2.0 at 2h); the Table 1 cases
+4.25–6.0, the corner 7.75 and 2.8P tuning 7.25 (errors 0.59 % at the step, 0.083 %
+extrapolated).
 """
 
 from __future__ import annotations
@@ -149,8 +154,8 @@ PARAMETERS: dict[str, Param] = {
                                 exclusive_minimum=True, maximum=1.0),
     **periodic.PARAMETERS,
     # 20 iterates: from the linear start, tuned at 3.3P with 1.5 times the fuselage stiffness
-    # the extrapolation needs 18 (window 12: 21.75 revolutions instead of 10.25; at 2.8P 12.75
-    # instead of 10.25); the Table 1 cases restart after 8-9, before the window fills
+    # the extrapolation needs 18 (window 12: 21.75 revolutions instead of 10.25 at stop 31; at
+    # 2.8P 12.75 instead of 10.25); the Table 1 cases restart after 8-9, before the window fills
     **periodic.shooting_parameters(window=20),
 }
 
@@ -389,17 +394,23 @@ def run(params: dict[str, Any]) -> xr.Dataset:
     elif wanted:
         # the periodic response at the coarser step, from the recorded one's end state: its
         # harmonics against the recorded ones estimate the time-step error (Richardson). At
-        # most six revolutions of iterates: tuned to 2.8P the estimate needs 17 quarter
-        # revolutions (with 16 it stayed uncertain and the step's 0.63 % error was archived;
-        # extrapolated, 0.088 %); the other cases stop after 6–14
+        # most six revolutions of iterates: without shooting's iterates (a run that marched),
+        # tuned to 2.8P the estimate needs 17 quarter revolutions (with 16 it stayed uncertain
+        # and the step's 0.63 % error was archived); with them every case tried stops after
+        # 4–8
         coarse = integrator(n_c)
         coarse.restore(integ.state())
         runs.append((coarse, n_c))
+        # the iterates shooting extrapolated, at the coarse samples (every other step's): the
+        # slow modes, known before the coarse iterates span them
+        history = ([align(b, j)[1::2] for b, j in rec.iterates]
+                   if nrev == 2 * n_c and len(rec.iterates) >= 3 else None)
         try:
             rev, uncertainty, _ = sector_response(
                 coarse, sampler(coarse), align, n_sectors=n_sec, steps_per_rev=n_c,
                 reference=data, omega=omega, n_max=N_MAX, accuracy=ESTIMATE_ACCURACY,
-                max_iterates=6 * max(n_sec, 2))
+                max_iterates=6 * max(n_sec, 2), history=history,
+                min_iterates=4 if history else 6)
         except RuntimeError as exc:
             notes.append(f"no step-error estimate{unextrapolated}: {exc}")
         else:

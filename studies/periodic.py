@@ -21,7 +21,7 @@ of the two steps: the time-step error of the harmonics, and their extrapolation 
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -162,7 +162,9 @@ class PeriodicRecord:
     revolutions (:func:`march`) rather than marched ones, and ``residual`` that
     extrapolation's unexplained part (:func:`rre_weights`); ``restarts`` how often
     :func:`shoot` restarted the model from an extrapolated state, and ``note`` what the case
-    message should say (e.g. that shooting fell back to marching).
+    message should say (e.g. that shooting fell back to marching); ``iterates`` the blocks of
+    samples of the iterates the last restart was extrapolated from, each with its phase (sector
+    periods since t = 0 at its end): a record of the slow modes for :func:`sector_response`.
     """
 
     samples: Array
@@ -172,6 +174,7 @@ class PeriodicRecord:
     residual: float = 0.0
     restarts: int = 0
     note: str = ""
+    iterates: list[tuple[Array, int]] = field(default_factory=list)
 
 
 def march(step: Callable[[], None], sample: Callable[[], Array],
@@ -388,6 +391,8 @@ def shoot(integ, sample: Callable[[], Array], signals: Callable[[Array], Array],
     blocks: list[Array] = []  # blocks since the last restart
     obs: list[Array] = []
     states: list[tuple[Array, ...]] = []  # end states of the blocks, at the phase of t = 0
+    raw: list[tuple[Array, int]] = []  # the observed blocks as sampled, with their phases
+    history: list[tuple[Array, int]] = []  # those of the last restart
     done = restarts = 0  # iterates done
     quarter = steps_per_rev * integ.h / n_sec  # s
 
@@ -418,7 +423,8 @@ def shoot(integ, sample: Callable[[], Array], signals: Callable[[Array], Array],
                         f"periodic by marching: {restarts} shooting restarts did not reach a "
                         "periodic response")
                 return PeriodicRecord(rec, int(np.ceil(revs_done - revolutions)), change,
-                                      residual=residual, restarts=restarts, note=note)
+                                      residual=residual, restarts=restarts, note=note,
+                                      iterates=history)
         if revs_done >= max_revolutions:
             raise RuntimeError(f"response not periodic after {max_revolutions} revolutions "
                                f"({restarts} shooting restarts; last change {change:.2e} > "
@@ -427,6 +433,7 @@ def shoot(integ, sample: Callable[[], Array], signals: Callable[[Array], Array],
             continue
         obs.append(observe(block, phase()))
         states.append(snapshot())
+        raw.append((block, phase()))
         k = len(obs) - 1
         if k < 2:
             continue
@@ -452,7 +459,7 @@ def shoot(integ, sample: Callable[[], Array], signals: Callable[[Array], Array],
                 k >= window or (k >= min_iterates
                                 and unexplained <= restart_fraction * tolerance)):
             if k >= window:  # slide the window
-                obs, states = obs[1:], states[1:]
+                obs, states, raw = obs[1:], states[1:], raw[1:]
             continue
         q, v = affine_combination(system, gamma, [s[0] for s in states[1:]],
                                   [s[1] for s in states[1:]])
@@ -472,7 +479,7 @@ def shoot(integ, sample: Callable[[], Array], signals: Callable[[Array], Array],
         except ValueError as exc:  # too far from the constraints: not a usable estimate
             report(f"revolution {revs_done:g}: extrapolated state unusable ({exc}; weights up "
                    f"to {np.abs(gamma).max():.3g}); marching on")
-            obs, states = obs[1:], states[1:]
+            obs, states, raw = obs[1:], states[1:], raw[1:]
             continue
         state = integ.state()
         state.update(t=t_restart, q=q, v=v, **more)
@@ -481,7 +488,7 @@ def shoot(integ, sample: Callable[[], Array], signals: Callable[[Array], Array],
         report(f"revolution {revs_done:g}: restarted from the extrapolated periodic state "
                f"(restart {restarts}, {k} iterates, unexplained part {residual:.3f}, weights up "
                f"to {np.abs(gamma).max():.3g})")
-        blocks, obs, states = [], [], []
+        blocks, obs, states, history, raw = [], [], [], raw, []
 
 
 def referred_harmonics(rows: Array, omega: float, n_max: int) -> NDArray[np.complex128]:
@@ -558,10 +565,33 @@ def coarser_steps(steps_per_rev: int, n_sectors: int, n_max: int) -> int | None:
     return n_c if n_c >= 2 * n_max + 2 else None
 
 
+def _secant_fixed_point(blocks: Sequence[Array], pairs: tuple[Array, Array],
+                        rcond: float = 1e-10) -> Array:
+    """Fixed point y* = y_k − (JU) c of the iterates ``blocks`` y_0 … y_k (k ≥ 1) by a secant
+    step over ``pairs`` (u, Ju) (arrays of blocks) and the iterates' own pairs: c minimizes
+    ‖g − (JU − U) c‖ for g = y_k − y_{k−1}, every column but the time on the scale of its
+    largest sample in y_k (see :func:`sector_response`). The time column is y_k's."""
+    y = np.array(blocks, dtype=float)
+    d = np.diff(y, axis=0)
+    u = np.concatenate([pairs[0], d[:-1]])
+    ju = np.concatenate([pairs[1], d[1:]])
+    scale = np.abs(y[-1, :, 1:]).max(axis=0)
+    live = np.nonzero(scale > 0)[0] + 1
+
+    def flat(a: Array) -> Array:  # (count, rows, columns) → (rows · live columns, count)
+        return (a[:, :, live] / scale[live - 1]).reshape(len(a), -1).T
+
+    c, *_ = np.linalg.lstsq(flat(ju - u), flat(d[-1:])[:, 0], rcond=rcond)
+    out = y[-1].copy()
+    out[:, 1:] -= np.tensordot(c, ju[:, :, 1:], axes=1)
+    return out
+
+
 def sector_response(integ, sample: Callable[[], Array], align: Callable[[Array, int], Array],
                     *, n_sectors: int, steps_per_rev: int, reference: Array, omega: float,
                     n_max: int = 8, min_iterates: int = 6, max_iterates: int = 16,
-                    accuracy: float = 0.1) -> tuple[Array, float, int]:
+                    accuracy: float = 0.1,
+                    history: Sequence[Array] | None = None) -> tuple[Array, float, int]:
     """The periodic response of ``integ`` near its state, by extrapolating its sector map.
 
     Started on (or near) the periodic response of the same model at another time step, e.g.
@@ -576,6 +606,16 @@ def sector_response(integ, sample: Callable[[], Array], align: Callable[[Array, 
     ``reference`` (each relative to the signal's largest harmonic in ``reference``): the
     difference the caller needs, to that relative accuracy. (The extrapolation's residual is
     no measure of its error until the iterates span the slow modes.)
+
+    With ``history``, the iterates of the same map at the other step that shooting
+    extrapolated (:attr:`PeriodicRecord.iterates`), the slow modes are known before this
+    step's iterates span them: their successive changes are secant pairs (u, Ju) of the map's
+    Jacobian J, which differs from this step's by the step error only. With this step's own
+    pairs added, the fixed point is estimated by a secant (Anderson type II) step from the
+    last iterate y_k with change g = y_k − y_{k−1}: c minimizes ‖g − (JU − U) c‖ and
+    y* = y_k − (JU) c; the part of g no pair explains is taken as decayed (the fast modes).
+    For a linear map whose transient lies in the pairs' span this is exact after two
+    iterates.
 
     Parameters
     ----------
@@ -593,6 +633,10 @@ def sector_response(integ, sample: Callable[[], Array], align: Callable[[Array, 
     reference
         Whole revolutions of samples of the other step's periodic response (the last one is
         used), for the stopping test.
+    history
+        Blocks of samples of successive iterates of the sector map at the other step, aligned
+        (``align``) and at this step's sample times, oldest first (at least three to be
+        used); ``None`` or fewer: this step's iterates only.
     omega
         Rotor speed (rad/s).
     n_max, min_iterates, max_iterates, accuracy
@@ -636,6 +680,14 @@ def sector_response(integ, sample: Callable[[], Array], align: Callable[[Array, 
         return float(np.max(np.abs(c)[:, live_ref] / scale_ref[live_ref])) if np.any(
             live_ref) else 0.0
 
+    pairs = None
+    if history is not None and len(history) >= 3:
+        h = np.array(history, dtype=float)
+        if h.shape[1:] != (m, len(reference[0])):
+            raise ValueError(f"history blocks must be {m} samples of {len(reference[0])} "
+                             f"columns, got {h.shape[1:]}")
+        dh = np.diff(h, axis=0)
+        pairs = (dh[:-1], dh[1:])  # (u, J u) of the other step's map
     blocks: list[Array] = []
     estimates: list[tuple[Array, NDArray[np.complex128]]] = []
     while True:
@@ -646,10 +698,13 @@ def sector_response(integ, sample: Callable[[], Array], align: Callable[[Array, 
         blocks.append(align(np.array(rows), round(integ.t / sector)))
         if len(blocks) < 2:
             continue
-        scale = np.abs(blocks[-1][:, 1:]).max(axis=0)
-        live = scale > 0
-        gamma, _ = rre_weights([b[:, 1:][:, live] / scale[live] for b in blocks])
-        rev = unfold(np.tensordot(gamma, np.array(blocks[1:]), axes=1))
+        if pairs is not None:
+            rev = unfold(_secant_fixed_point(blocks, pairs))
+        else:
+            scale = np.abs(blocks[-1][:, 1:]).max(axis=0)
+            live = scale > 0
+            gamma, _ = rre_weights([b[:, 1:][:, live] / scale[live] for b in blocks])
+            rev = unfold(np.tensordot(gamma, np.array(blocks[1:]), axes=1))
         estimates.append((rev, referred_harmonics(rev, omega, n_max)))
         if len(estimates) < 3:
             continue

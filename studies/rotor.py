@@ -634,6 +634,7 @@ def run(params: dict[str, Any]) -> xr.Dataset:
                     advance_ratio=p["flight_speed"] / (omega * UH60A.radius),
                     fuselage_stiffness=float(parts.fuselage_stiffness),
                     fuselage_damping=float(parts.fuselage_damping),
+                    simulated_revolutions=float(steps / nrev),
                     solver_seconds=time.perf_counter() - t0, steps=int(steps),
                     newton_iterations=int(iterations), unknowns=int(system.n))
     return ds

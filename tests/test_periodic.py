@@ -265,3 +265,32 @@ def test_sector_response_is_the_periodic_response_at_the_other_step(n_sectors):
         sector_response(_Ring(n, z_fine), ring.sample, _aligner(n_sectors),
                         n_sectors=n_sectors, steps_per_rev=n, reference=fine, omega=OMEGA,
                         max_iterates=3)
+
+
+def test_sector_response_with_the_slow_modes_known_from_other_iterates():
+    """Given the iterates of the same map from another start (what shooting extrapolated),
+    the secant step finds the periodic response in four iterates (the least it checks):
+    exact to roundoff (measured 1.2e-14 of the change), against ten without them; the history
+    is checked for shape."""
+    n = 24
+    z_fine, fine = _Ring(2 * n, np.zeros(4)).periodic(2 * n)
+    _, exact = _Ring(n, np.zeros(4)).periodic(n)
+    change = np.abs(rev_harmonics(exact[:, 1:]) - rev_harmonics(fine[1::2, 1:])).max()
+    align = _aligner(4)
+    other = _Ring(n, np.ones(4))  # a transient from another start
+    history = []
+    for j in range(1, 11):
+        rows = []
+        for _ in range(n // 4):
+            other.step()
+            rows.append(other.sample())
+        history.append(align(np.array(rows), j))
+    ring = _Ring(n, z_fine)
+    rev, uncertainty, iterates = sector_response(
+        ring, ring.sample, align, n_sectors=4, steps_per_rev=n, reference=fine, omega=OMEGA,
+        accuracy=1e-8, min_iterates=4, history=history)
+    err = np.abs(rev_harmonics(rev[:, 1:]) - rev_harmonics(exact[:, 1:])).max()
+    assert iterates == 4 and uncertainty <= 1e-8 and err < 1e-12 * change, (iterates, err)
+    with pytest.raises(ValueError, match="history blocks must be 6 samples of 6 columns"):
+        sector_response(_Ring(n, z_fine), ring.sample, align, n_sectors=4, steps_per_rev=n,
+                        reference=fine, omega=OMEGA, history=[h[::2] for h in history])
