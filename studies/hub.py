@@ -373,7 +373,7 @@ def run(params: dict[str, Any]) -> xr.Dataset:
                     system=sysm, steps_per_rev=nrev, revolutions=p["revolutions"],
                     max_revolutions=p["max_revolutions"], tolerance=p["periodic_tolerance"],
                     window=p["shooting_window"], max_restarts=p["shooting_restarts"],
-                    hint=hint)
+                    secant=True, hint=hint)
     else:
         rec = march(stepper(integ, omega), sampler(integ), signals, steps_per_rev=nrev,
                     revolutions=p["revolutions"], max_revolutions=p["max_revolutions"],
@@ -403,14 +403,14 @@ def run(params: dict[str, Any]) -> xr.Dataset:
         runs.append((coarse, n_c))
         # the iterates shooting extrapolated, at the coarse samples (every other step's): the
         # slow modes, known before the coarse iterates span them
-        history = ([align(b, j)[1::2] for b, j in rec.iterates]
-                   if nrev == 2 * n_c and len(rec.iterates) >= 3 else None)
+        history = ([[align(b, j)[1::2] for b, j in run] for run in rec.iterates]
+                   if nrev == 2 * n_c else None)
         try:
             rev, uncertainty, _ = sector_response(
                 coarse, sampler(coarse), align, n_sectors=n_sec, steps_per_rev=n_c,
                 reference=data, omega=omega, n_max=N_MAX, accuracy=ESTIMATE_ACCURACY,
                 max_iterates=6 * max(n_sec, 2), history=history,
-                min_iterates=4 if history else 6)
+                min_iterates=4 if any(len(run) >= 3 for run in history or ()) else 6)
         except RuntimeError as exc:
             notes.append(f"no step-error estimate{unextrapolated}: {exc}")
         else:

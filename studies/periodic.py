@@ -152,6 +152,52 @@ def rre_weights(seq: Sequence[Array], rcond: float = 1e-10) -> tuple[Array, floa
     return gamma, residual
 
 
+def secant_weights(windows: Sequence[Sequence[Array]], rcond: float = 1e-10
+                   ) -> tuple[Array, float]:
+    """Fixed point of a map by a secant (Anderson type II) step over the iterates it is known
+    at: ``windows`` are runs of successive iterates x_0, x_1, … of the map (each the same
+    linear observation, e.g. scaled samples), the last run ending at the current iterate x_k.
+
+    Within each run, three successive iterates give a secant pair of the map's Jacobian J:
+    u = x_i − x_{i−1} and Ju = x_{i+1} − x_i. With g = x_k − x_{k−1} the last change, c
+    minimizes ‖g − (JU − U) c‖ and the fixed point is x* = x_k − (JU) c: Newton's step with
+    J known on the pairs' span and the part of g outside it taken as decayed (fast modes).
+    Runs from earlier starts (an earlier shooting window, the same map at another time step)
+    add what they know of the slow modes to the current run's own pairs. For a linear map
+    whose transient lies in the pairs' span the estimate is exact.
+
+    Returns
+    -------
+    weights : ndarray
+        Affine weights (sum 1) over the iterates of all runs in order, so that Σ w_j x_j is
+        x* (and the same combination of any other linear observation of the iterates, e.g.
+        the states, is its fixed point).
+    residual : float
+        ‖g − (JU − U) c‖ / ‖g‖: the part of the last change the pairs leave unexplained.
+    """
+    flat = [np.ravel(x) for run in windows for x in run]
+    if len(windows[-1]) < 2:
+        raise ValueError("secant_weights: the last run needs two iterates (a change)")
+    ends = np.cumsum([len(run) for run in windows])
+    triples = [(i - 1, i, i + 1) for start, end in zip(ends - np.diff(ends, prepend=0), ends,
+                                                        strict=True)
+               for i in range(start + 1, end - 1)]
+    k = len(flat) - 1
+    g = flat[k] - flat[k - 1]
+    w = np.zeros(len(flat))
+    w[k] = 1.0
+    norm = np.linalg.norm(g)
+    if not triples:
+        return w, 1.0
+    y = np.column_stack([flat[c] - 2 * flat[b] + flat[a] for a, b, c in triples])
+    coef, *_ = np.linalg.lstsq(y, g, rcond=rcond)
+    for (_, b, c), x in zip(triples, coef, strict=True):  # x* = x_k − Σ c (x_c − x_b)
+        w[c] -= x
+        w[b] += x
+    residual = float(np.linalg.norm(g - y @ coef) / norm) if norm > 0 else 0.0
+    return w, residual
+
+
 @dataclass
 class PeriodicRecord:
     """Whole revolutions of samples once periodic.
@@ -164,7 +210,8 @@ class PeriodicRecord:
     :func:`shoot` restarted the model from an extrapolated state, and ``note`` what the case
     message should say (e.g. that shooting fell back to marching); ``iterates`` the blocks of
     samples of the iterates the last restart was extrapolated from, each with its phase (sector
-    periods since t = 0 at its end): a record of the slow modes for :func:`sector_response`.
+    periods since t = 0 at its end), one list per window (the last restarts' with
+    ``secant``): a record of the slow modes for :func:`sector_response`.
     """
 
     samples: Array
@@ -174,7 +221,7 @@ class PeriodicRecord:
     residual: float = 0.0
     restarts: int = 0
     note: str = ""
-    iterates: list[tuple[Array, int]] = field(default_factory=list)
+    iterates: list[list[tuple[Array, int]]] = field(default_factory=list)
 
 
 def march(step: Callable[[], None], sample: Callable[[], Array],
@@ -312,12 +359,16 @@ def shooting_parameters(window: int) -> dict[str, Param]:
     }
 
 
+# earlier windows whose secant pairs a restart of shoot(secant=True) keeps
+SECANT_WINDOWS = 4
+
+
 def shoot(integ, sample: Callable[[], Array], signals: Callable[[Array], Array], *,
           observe: Callable[[Array, int], Array], symmetry, system, steps_per_rev: int,
           revolutions: int, max_revolutions: int, tolerance: float,
           groups: Sequence[int] | None = None, separate_mean: bool = False,
           window: int = 12, max_restarts: int = 4, restart_fraction: float = 0.5,
-          max_residual: float = 0.1, min_iterates: int = 4,
+          max_residual: float = 0.1, min_iterates: int = 4, secant: bool = False,
           hint: str = "raise max_revolutions") -> PeriodicRecord:
     """Periodic response by shooting: extrapolate the fixed point of the sector map and
     restart the model from it, until two successive marched revolutions agree.
@@ -341,6 +392,13 @@ def shoot(integ, sample: Callable[[], Array], signals: Callable[[Array], Array],
     not lie on the velocity constraints, and projecting them would start an undamped
     two-step mode).
 
+    A restart that misses (the map is nonlinear: far from the fixed point its Jacobian
+    differs) starts a new window. With ``secant`` the windows of the last
+    :data:`SECANT_WINDOWS` restarts stay known: their successive iterates are secant pairs of
+    the map's Jacobian, and the estimate is a secant step over them and the new window's own
+    pairs (:func:`secant_weights`, a quasi-Newton shooting), from two new iterates on,
+    instead of a new extrapolation that must span the slow modes again.
+
     The periodicity test is :func:`march`'s: the harmonics of two successive whole revolutions
     marched since the last restart change by at most ``tolerance``; the recorded revolutions
     are the last ``revolutions`` of those (all marched from one state, none extrapolated).
@@ -362,9 +420,10 @@ def shoot(integ, sample: Callable[[], Array], signals: Callable[[Array], Array],
         :class:`solver.symmetry.CyclicSymmetry` or ``None`` (the one-revolution map).
     system
         The assembled model (for the director triads of the combination).
-    window, max_restarts, restart_fraction, max_residual, min_iterates
+    window, max_restarts, restart_fraction, max_residual, min_iterates, secant
         Largest number of iterates extrapolated per restart (the window spans the lightly
-        damped modes: two per mode), restarts allowed, and when to restart (see above).
+        damped modes: two per mode), restarts allowed, when to restart (see above), and
+        whether later restarts keep the earlier windows' secant pairs.
     hint
         Advice appended to the error when the response is not periodic in time.
 
@@ -392,7 +451,8 @@ def shoot(integ, sample: Callable[[], Array], signals: Callable[[Array], Array],
     obs: list[Array] = []
     states: list[tuple[Array, ...]] = []  # end states of the blocks, at the phase of t = 0
     raw: list[tuple[Array, int]] = []  # the observed blocks as sampled, with their phases
-    history: list[tuple[Array, int]] = []  # those of the last restart
+    memory: list[tuple[list[Array], list[tuple[Array, ...]]]] = []  # earlier windows
+    history: list[list[tuple[Array, int]]] = []  # those of the last restarts' windows
     done = restarts = 0  # iterates done
     quarter = steps_per_rev * integ.h / n_sec  # s
 
@@ -401,6 +461,7 @@ def shoot(integ, sample: Callable[[], Array], signals: Callable[[Array], Array],
 
     change = float("inf")
     residual = 0.0
+    gave_up = False
     while True:
         rows = []
         for _ in range(m):
@@ -417,9 +478,11 @@ def shoot(integ, sample: Callable[[], Array], signals: Callable[[Array], Array],
             ok = change <= tolerance and len(blocks) >= revolutions * n_sec
             report(f"revolution {revs_done:g}: periodicity change {change:.2e}, tolerance "
                    f"{tolerance:g}" + (" (periodic)" if ok else ""))
+            # not periodic after the last restart allowed: marching on, shooting gave up
+            gave_up = gave_up or (not ok and window >= 2 and restarts == max_restarts)
             if ok:
                 rec = np.concatenate(blocks[-revolutions * n_sec :])
-                note = ("" if window < 2 or restarts < max_restarts else
+                note = ("" if not gave_up else
                         f"periodic by marching: {restarts} shooting restarts did not reach a "
                         "periodic response")
                 return PeriodicRecord(rec, int(np.ceil(revs_done - revolutions)), change,
@@ -443,7 +506,14 @@ def shoot(integ, sample: Callable[[], Array], signals: Callable[[Array], Array],
         ref = obs[-1] - obs[-1].mean(axis=0) if separate_mean else obs[-1]
         scale = np.abs(ref).max(axis=0)
         live = scale > 0
-        gamma, residual = rre_weights([o[:, live] / scale[live] for o in obs])
+        if memory:  # a secant step over the earlier windows' pairs and this one's
+            gamma, residual = secant_weights([[o[:, live] / scale[live] for o in run]
+                                              for run in [*(w[0] for w in memory), obs]])
+            pool = [*(x for w in memory for x in w[1]), *states]
+            least = max(2, n_sec)
+        else:
+            gamma, residual = rre_weights([o[:, live] / scale[live] for o in obs])
+            pool, least = states[1:], min_iterates
         # the part of the last change the extrapolation leaves unexplained, relative to the
         # signals' scale: the estimate's error, to first order
         last = float(np.max(np.abs(obs[-1] - obs[-2])[:, live] / scale[live]))
@@ -452,19 +522,19 @@ def shoot(integ, sample: Callable[[], Array], signals: Callable[[Array], Array],
         # the locked hub passes the test at 7.5e-4 after 3 revolutions without a restart, its
         # harmonics that far from the periodic ones; restarted after one revolution, they are
         # within 1.3e-7 of a 400-revolution march to 1e-6)
-        if last <= 0.1 * tolerance:
+        # (after a restart that passed the test's tolerance, with a secant step at hand, the
+        # test decides: restarting again would only start its two revolutions over)
+        if last <= (tolerance if memory else 0.1 * tolerance):
             continue
         unexplained = residual * last
         if residual > max_residual or not (
-                k >= window or (k >= min_iterates
+                k >= window or (k >= least
                                 and unexplained <= restart_fraction * tolerance)):
             if k >= window:  # slide the window
                 obs, states, raw = obs[1:], states[1:], raw[1:]
             continue
-        q, v = affine_combination(system, gamma, [s[0] for s in states[1:]],
-                                  [s[1] for s in states[1:]])
-        more = {key: gamma @ np.array([s[2 + i] for s in states[1:]])
-                for i, key in enumerate(extra)}
+        q, v = affine_combination(system, gamma, [s[0] for s in pool], [s[1] for s in pool])
+        more = {key: gamma @ np.array([s[2 + i] for s in pool]) for i, key in enumerate(extra)}
         # the estimate is a state of the phase of t = 0: restart at the next whole revolution
         # (the forcing and the driven rotation repeat), so that the revolutions recorded after
         # it start at ψ = 0 like a marched run's
@@ -488,7 +558,10 @@ def shoot(integ, sample: Callable[[], Array], signals: Callable[[Array], Array],
         report(f"revolution {revs_done:g}: restarted from the extrapolated periodic state "
                f"(restart {restarts}, {k} iterates, unexplained part {residual:.3f}, weights up "
                f"to {np.abs(gamma).max():.3g})")
-        blocks, obs, states, history, raw = [], [], [], raw, []
+        if secant:  # what this window knows of the slow modes, for the next estimates
+            memory = [*memory, (obs, states)][-SECANT_WINDOWS:]
+        history = [*history, raw][-(SECANT_WINDOWS if secant else 1):]
+        blocks, obs, states, raw = [], [], [], []
 
 
 def referred_harmonics(rows: Array, omega: float, n_max: int) -> NDArray[np.complex128]:
@@ -565,33 +638,12 @@ def coarser_steps(steps_per_rev: int, n_sectors: int, n_max: int) -> int | None:
     return n_c if n_c >= 2 * n_max + 2 else None
 
 
-def _secant_fixed_point(blocks: Sequence[Array], pairs: tuple[Array, Array],
-                        rcond: float = 1e-10) -> Array:
-    """Fixed point y* = y_k − (JU) c of the iterates ``blocks`` y_0 … y_k (k ≥ 1) by a secant
-    step over ``pairs`` (u, Ju) (arrays of blocks) and the iterates' own pairs: c minimizes
-    ‖g − (JU − U) c‖ for g = y_k − y_{k−1}, every column but the time on the scale of its
-    largest sample in y_k (see :func:`sector_response`). The time column is y_k's."""
-    y = np.array(blocks, dtype=float)
-    d = np.diff(y, axis=0)
-    u = np.concatenate([pairs[0], d[:-1]])
-    ju = np.concatenate([pairs[1], d[1:]])
-    scale = np.abs(y[-1, :, 1:]).max(axis=0)
-    live = np.nonzero(scale > 0)[0] + 1
-
-    def flat(a: Array) -> Array:  # (count, rows, columns) → (rows · live columns, count)
-        return (a[:, :, live] / scale[live - 1]).reshape(len(a), -1).T
-
-    c, *_ = np.linalg.lstsq(flat(ju - u), flat(d[-1:])[:, 0], rcond=rcond)
-    out = y[-1].copy()
-    out[:, 1:] -= np.tensordot(c, ju[:, :, 1:], axes=1)
-    return out
-
-
 def sector_response(integ, sample: Callable[[], Array], align: Callable[[Array, int], Array],
                     *, n_sectors: int, steps_per_rev: int, reference: Array, omega: float,
                     n_max: int = 8, min_iterates: int = 6, max_iterates: int = 16,
                     accuracy: float = 0.1,
-                    history: Sequence[Array] | None = None) -> tuple[Array, float, int]:
+                    history: Sequence[Sequence[Array]] | None = None
+                    ) -> tuple[Array, float, int]:
     """The periodic response of ``integ`` near its state, by extrapolating its sector map.
 
     Started on (or near) the periodic response of the same model at another time step, e.g.
@@ -634,9 +686,9 @@ def sector_response(integ, sample: Callable[[], Array], align: Callable[[Array, 
         Whole revolutions of samples of the other step's periodic response (the last one is
         used), for the stopping test.
     history
-        Blocks of samples of successive iterates of the sector map at the other step, aligned
-        (``align``) and at this step's sample times, oldest first (at least three to be
-        used); ``None`` or fewer: this step's iterates only.
+        Runs of blocks of samples of successive iterates of the sector map at the other step,
+        aligned (``align``) and at this step's sample times, oldest first (runs of fewer than
+        three are not used); ``None``: this step's iterates only.
     omega
         Rotor speed (rad/s).
     n_max, min_iterates, max_iterates, accuracy
@@ -680,14 +732,11 @@ def sector_response(integ, sample: Callable[[], Array], align: Callable[[Array, 
         return float(np.max(np.abs(c)[:, live_ref] / scale_ref[live_ref])) if np.any(
             live_ref) else 0.0
 
-    pairs = None
-    if history is not None and len(history) >= 3:
-        h = np.array(history, dtype=float)
-        if h.shape[1:] != (m, len(reference[0])):
+    past = [np.array(run, dtype=float) for run in history or () if len(run) >= 3]
+    for run in past:
+        if run.shape[1:] != (m, len(reference[0])):
             raise ValueError(f"history blocks must be {m} samples of {len(reference[0])} "
-                             f"columns, got {h.shape[1:]}")
-        dh = np.diff(h, axis=0)
-        pairs = (dh[:-1], dh[1:])  # (u, J u) of the other step's map
+                             f"columns, got {run.shape[1:]}")
     blocks: list[Array] = []
     estimates: list[tuple[Array, NDArray[np.complex128]]] = []
     while True:
@@ -698,8 +747,16 @@ def sector_response(integ, sample: Callable[[], Array], align: Callable[[Array, 
         blocks.append(align(np.array(rows), round(integ.t / sector)))
         if len(blocks) < 2:
             continue
-        if pairs is not None:
-            rev = unfold(_secant_fixed_point(blocks, pairs))
+        if past:
+            # each column on the scale of its largest sample in the last iterate
+            scale = np.abs(blocks[-1][:, 1:]).max(axis=0)
+            live = np.nonzero(scale > 0)[0] + 1
+            runs = [*past, np.array(blocks)]
+            w, _ = secant_weights([[b[:, live] / scale[live - 1] for b in run]
+                                   for run in runs])
+            fixed = blocks[-1].copy()
+            fixed[:, 1:] = np.tensordot(w, np.concatenate(runs)[:, :, 1:], axes=1)
+            rev = unfold(fixed)
         else:
             scale = np.abs(blocks[-1][:, 1:]).max(axis=0)
             live = scale > 0

@@ -288,9 +288,9 @@ def test_sector_response_with_the_slow_modes_known_from_other_iterates():
     ring = _Ring(n, z_fine)
     rev, uncertainty, iterates = sector_response(
         ring, ring.sample, align, n_sectors=4, steps_per_rev=n, reference=fine, omega=OMEGA,
-        accuracy=1e-8, min_iterates=4, history=history)
+        accuracy=1e-8, min_iterates=4, history=[history])
     err = np.abs(rev_harmonics(rev[:, 1:]) - rev_harmonics(exact[:, 1:])).max()
     assert iterates == 4 and uncertainty <= 1e-8 and err < 1e-12 * change, (iterates, err)
     with pytest.raises(ValueError, match="history blocks must be 6 samples of 6 columns"):
         sector_response(_Ring(n, z_fine), ring.sample, align, n_sectors=4, steps_per_rev=n,
-                        reference=fine, omega=OMEGA, history=[h[::2] for h in history])
+                        reference=fine, omega=OMEGA, history=[[h[::2] for h in history]])
