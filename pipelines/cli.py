@@ -233,10 +233,10 @@ def plot(archive: Path, out_dir: Path, formats: tuple[str, ...]) -> None:
               help="Output directory: cases/, archive.nc and plots/.")
 @click.option("--model", "model", default="rotor", show_default=True,
               type=click.Choice(sorted(BUILT_IN_STUDIES)),
-              help="rotor: the paper's UH-60 rotor with elastic blades and aerodynamics (6 to 14 "
-                   "minutes per case: the built-in study takes about 25 minutes with 2 "
-                   "workers); hub: a rigid hub with assumed 3P/5P blade shears (under 2 "
-                   "minutes).")
+              help="rotor: the paper's UH-60 rotor with elastic blades and aerodynamics (under "
+                   "a minute per case once its kernels are compiled: the built-in study takes "
+                   "about 1.5 minutes with 2 workers, 3 in a fresh install); hub: a rigid hub "
+                   "with assumed 3P/5P blade shears (under a minute).")
 @workers_option
 @scheduler_option
 @click.pass_context

@@ -34,7 +34,7 @@ iterates are extrapolated to their fixed point and the model restarts from it
 step, symmetric and of order 2, composed into a fourth-order step (``composition``, default
 Suzuki's five substeps: :mod:`solver.composition`): at the default 40 steps/rev the harmonics
 0–8 are within 0.18 % of the step-converged ones on the free case (the plain ``ep`` at 160
-steps/rev: 3.3 %), at the cost of 200 substeps per revolution, but 0.89 % at 3.3P tuning with
+steps/rev: 3.3 %), at the cost of 200 substeps per revolution, but 0.885 % at 3.3P tuning with
 1.5 times the fuselage stiffness.
 
 So each run also computes the response at about twice the step: from the recorded run's end

@@ -275,7 +275,7 @@ def test_default_step_gives_the_step_converged_harmonics_in_at_most_8_revolution
     default's extrapolated harmonics err by 1.7e-4. The composed step is of order 4 on the
     harmonics: 24 → 48 steps/rev take the error from 1.36e-2 to 8.3e-4 (log2 ratio 4.03).
     Tuned to 3.3P with 1.5 times the fuselage stiffness (a corner of issue 14's sweep, whose
-    linear start is the poorest) the step errs by 0.89 %, which the estimate flags (8.1e-3),
+    linear start is the poorest) the step errs by 0.885 %, which the estimate flags (8.1e-3),
     and the default's extrapolated harmonics by 0.10 %, after 7.75 revolutions in all (6.75
     and 1.0)."""
     from studies.hub import run
