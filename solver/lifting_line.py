@@ -357,7 +357,8 @@ class LiftingLineSet(ElementSet):
         x, xd, xa = np.empty((self.K, 12)), np.empty((self.K, 12)), np.empty((self.K, 12))
         aero_kernels.section_inputs(q, v, a, self.idx48, *self._nz, x, xd, xa)
         mu = q[self.state_idx]
-        al = np.ascontiguousarray(np.broadcast_to(q[self.inflow_idx], (self.K, self.n_i)))
+        al = np.empty((self.K, self.n_i))
+        al[:] = q[self.inflow_idx]  # the same inflow states at every section
         return x, xd, xa, mu, al
 
     def _inflow_terms(self, pos):
