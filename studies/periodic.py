@@ -396,8 +396,9 @@ def shoot(integ, sample: Callable[[], Array], signals: Callable[[Array], Array],
     differs) starts a new window. With ``secant`` the windows of the last
     :data:`SECANT_WINDOWS` restarts stay known: their successive iterates are secant pairs of
     the map's Jacobian, and the estimate is a secant step over them and the new window's own
-    pairs (:func:`secant_weights`, a quasi-Newton shooting), from two new iterates on,
-    instead of a new extrapolation that must span the slow modes again.
+    pairs (:func:`secant_weights`, a quasi-Newton shooting), from one revolution of new
+    iterates on (at least two), instead of a new extrapolation that must span the slow modes
+    again; and a change within the periodicity tolerance is left to the test.
 
     The periodicity test is :func:`march`'s: the harmonics of two successive whole revolutions
     marched since the last restart change by at most ``tolerance``; the recorded revolutions
@@ -777,6 +778,8 @@ def sector_response(integ, sample: Callable[[], Array], align: Callable[[Array, 
         change = relative(c - c_ref)
         spread = max(relative(c - estimates[-2][1]), relative(c - estimates[-3][1]))
         uncertainty = spread / change if change > 0 else 0.0
+        if past and unexplained > max_residual:  # out of iterates, the pairs still at odds
+            uncertainty = max(uncertainty, unexplained)
         if ((len(blocks) >= min_iterates and uncertainty <= accuracy)
                 or len(blocks) >= max_iterates):
             return rev, uncertainty, len(blocks)
