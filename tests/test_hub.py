@@ -281,14 +281,18 @@ def test_default_run_stores_the_step_error_of_its_harmonics():
     _, est = richardson(_samples(own), _samples(coarse), omega, 8, order=4)
     assert 1e-3 < est.max() < 3e-3
     assert own.attrs["step_error_estimate"] == pytest.approx(est.max(), rel=0.03)
-    # the default: the same run and estimate, its harmonics 0-8 moved by c(h) - c(2h) over 15
+    # the default: the same run and estimate, its harmonics 0-8 moved by c(h) - c(2h) over 15.
+    # The same to roundoff, not to the bit: the secant step over shooting's nearly parallel
+    # iterates amplifies roundoff, and two runs in one process need not round alike (measured
+    # 2e-8 apart in this test under pytest, identical in a standalone process)
     ds = run({})
     assert ds.attrs["richardson"] == 1 and ds.attrs["message"] == ""
-    assert ds.attrs["step_error_estimate"] == own.attrs["step_error_estimate"]
+    assert ds.attrs["step_error_estimate"] == pytest.approx(own.attrs["step_error_estimate"],
+                                                            rel=1e-6)
     c_own, c_ex = (referred_harmonics(_samples(d)[-40:], omega, 8) for d in (own, ds))
     scale = np.abs(c_own).max(axis=0)
     moved = np.max(np.abs(c_ex - c_own) / scale)
-    assert moved == pytest.approx(ds.attrs["step_error_estimate"], rel=1e-9)
+    assert moved == pytest.approx(ds.attrs["step_error_estimate"], rel=1e-6)
     # harmonic 8 needs 18 samples per revolution at the coarser step: none below 40 steps/rev
     low = run({"bifilar": "locked", "steps_per_rev": 32})
     assert np.isnan(low.attrs["step_error_estimate"]) and low.attrs["richardson"] == 0
