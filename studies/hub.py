@@ -40,20 +40,20 @@ steps/rev: 3.3 %), at the cost of 200 substeps per revolution, but 0.885 % at 3.
 So each run also computes the response at about twice the step: from the recorded run's end
 state, a few quarter revolutions at 2h are extrapolated to that step's periodic response
 (:func:`studies.periodic.sector_response`). The slow modes the coarse iterates relax along
-are those shooting extrapolated at the step, so its iterates (the record's ``iterates``) give
-the secant pairs of a Newton step to that response from the second coarse iterate on: 1–2
-revolutions at 2h, where the coarse iterates alone needed 2.5–4.25 to span the slow modes,
-as long as those pairs explain the coarse changes (near the fuselage mode's resonance with
-4P they do not, and the coarse iterates find the slow modes themselves, up to 4 revolutions).
+are those shooting extrapolated at the step, so its iterates (the record's ``iterates``:
+those a restart was extrapolated from, and those marched since, near the periodic response)
+give the secant pairs of a Newton step to that response from the second coarse iterate on:
+1–1.5 revolutions at 2h, where the coarse iterates alone needed 2.5–4.25 to span the slow
+modes (an estimate counts only while the pairs explain the coarse changes).
 The harmonics 0–8 at the two steps give the error estimate |c(h) − c(2h)|/15
 (:func:`studies.periodic.richardson`; /3 for the plain step), stored as
 ``step_error_estimate`` (``error_estimate``): 1.70e-3 on the free case against its measured
-1.85e-3, 8.1e-3 against 8.9e-3 in that corner. With ``richardson`` (default) the recorded
+1.85e-3, 8.2e-3 against 8.8e-3 in that corner. With ``richardson`` (default) the recorded
 harmonics 0–8 are extrapolated to zero step, the h⁴ term of a composed run or the h² term of
-a plain one taken out: 1.7e-4 and 1.0e-3 from the step-converged harmonics in those two cases.
-A free case simulates 6.5 revolutions in all (4.5 at the step, 2.0 at 2h); the Table 1 cases
-4.25–6.75, the corner 7.75 and 2.8P tuning 7.25 (errors 0.59 % at the step, 0.083 %
-extrapolated); issue 14's 60-case sweep 7.2 on average, 13 cases above 8, at most 10.0.
+a plain one taken out: 1.7e-4 and 8.3e-4 from the step-converged harmonics in those two cases.
+A free case simulates 5.5 revolutions in all (4.5 at the step, 1.0 at 2h); the Table 1 cases
+4.25–6.0, the corner 7.75 and 2.8P tuning 7.25 (errors 0.63 % at the step, 0.091 %
+extrapolated); issue 14's 60-case sweep 6.6 on average, 2 cases above 8 (at most 9.25).
 """
 
 from __future__ import annotations
@@ -253,10 +253,10 @@ def describing_response(p: dict[str, Any], holes) -> tuple[np.ndarray, np.ndarra
     also where the iteration does not settle (a jump between coexisting responses).
 
     Not the default start (``initial_state = "describing"``): shooting from it is shorter
-    (the free case restarts after 6 quarter revolutions instead of 9), but the step-error
-    estimate then has fewer of shooting's iterates to take the slow modes from, and its
-    coarse iterates need longer: 6.75 revolutions in all against 6.5, 9.0 against 7.75 at 3.3P
-    with 1.5 times the stiffness (on issue 14's sweep the same mean, 7.2)."""
+    (the free case restarts after 6 quarter revolutions instead of 9; 5.25 revolutions in all
+    against 5.5, the two largest swings of issue 14's sweep 7.25 against 8.75 and 9.25), but
+    at 3.3P with 1.5 times the stiffness it needs a second restart (9.0 against 7.75), and it
+    was not measured over the whole sweep."""
     base = linear_response(p, holes)
     if p["bifilar"] == "locked" or holes.shape != "circle":
         return base
@@ -442,8 +442,8 @@ def run(params: dict[str, Any]) -> xr.Dataset:
         # harmonics against the recorded ones estimate the time-step error (Richardson). At
         # most six revolutions of iterates: without shooting's iterates (a run that marched),
         # tuned to 2.8P the estimate needs 17 quarter revolutions (with 16 it stayed uncertain
-        # and the step's 0.63 % error was archived); with them most cases stop after 4–8,
-        # near the fuselage mode's resonance with 4P after up to 16 (the guard, max_residual)
+        # and the step's 0.63 % error was archived); with them the 60 sweep cases stop after
+        # 4–6
         coarse = integrator(n_c)
         coarse.restore(integ.state())
         runs.append((coarse, n_c))

@@ -211,7 +211,9 @@ class PeriodicRecord:
     message should say (e.g. that shooting fell back to marching); ``iterates`` the blocks of
     samples of the iterates the last restart was extrapolated from, each with its phase (sector
     periods since t = 0 at its end), one list per window (the last restarts' with
-    ``secant``): a record of the slow modes for :func:`sector_response`.
+    ``secant``), then the iterates marched since the last restart (near the periodic
+    response, where the map is nearly linear): a record of the slow modes for
+    :func:`sector_response`.
     """
 
     samples: Array
@@ -488,7 +490,7 @@ def shoot(integ, sample: Callable[[], Array], signals: Callable[[Array], Array],
                         "periodic response")
                 return PeriodicRecord(rec, int(np.ceil(revs_done - revolutions)), change,
                                       residual=residual, restarts=restarts, note=note,
-                                      iterates=history)
+                                      iterates=[*history, raw])
         if revs_done >= max_revolutions:
             raise RuntimeError(f"response not periodic after {max_revolutions} revolutions "
                                f"({restarts} shooting restarts; last change {change:.2e} > "

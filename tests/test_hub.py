@@ -262,8 +262,8 @@ def test_default_run_stores_the_step_error_of_its_harmonics():
     the step, extrapolated from a few quarter-revolution iterates started on its own periodic
     state. Against the same Richardson estimate from an independent run at twice the step
     (shot from rest, to the periodicity test's tolerance) it agrees within 3 % (measured
-    1.698e-3 against 1.701e-3), after 1–2 revolutions at twice the step (the slow modes taken
-    from the iterates shooting extrapolated). By default the
+    1.699e-3 against 1.701e-3), after one revolution at twice the step (the slow modes taken
+    from shooting's iterates). By default the
     recorded harmonics are then extrapolated to zero step, exactly by the correction the
     estimate measures; with ``richardson = false`` they are the step's own."""
     from studies.hub import run
@@ -271,7 +271,7 @@ def test_default_run_stores_the_step_error_of_its_harmonics():
 
     own = run({"richardson": False})
     assert own.attrs["message"] == "" and own.attrs["estimate_samples_per_rev"] == 20
-    # issue 13: at most 8 revolutions per case, the coarser step's included (measured 6.5)
+    # issue 13: at most 8 revolutions per case, the coarser step's included (measured 5.5)
     assert own.attrs["simulated_revolutions"] <= 8
     assert 1.0 <= own.attrs["estimate_revolutions"] <= 4.0 and own.attrs["richardson"] == 0
     coarse = run({"steps_per_rev": 20, "richardson": False, "error_estimate": False})
@@ -308,13 +308,13 @@ def test_default_step_gives_the_step_converged_harmonics_in_at_most_8_revolution
 
     Free case: the step (Suzuki's composition of ep, 40 steps/rev) errs by 0.18 % of each
     signal's largest harmonic (the plain ep at 160 steps/rev: 3.3 %) after 7.0 revolutions
-    (4.5 at the step, recorded ones included, and 2.0 at twice the step for the estimate); the
+    (4.5 at the step, recorded ones included, and 1.0 at twice the step for the estimate); the
     stored estimate is that error within 25 % (measured 1.70e-3 against 1.85e-3), and the
     default's extrapolated harmonics err by 1.7e-4. The composed step is of order 4 on the
     harmonics: 24 → 48 steps/rev take the error from 1.36e-2 to 8.3e-4 (log2 ratio 4.03).
     Tuned to 3.3P with 1.5 times the fuselage stiffness (a corner of issue 14's sweep, whose
-    linear start is the poorest) the step errs by 0.885 %, which the estimate flags (8.1e-3),
-    and the default's extrapolated harmonics by 0.10 %, after 7.75 revolutions in all (6.75
+    linear start is the poorest) the step errs by 0.88 %, which the estimate flags (8.2e-3),
+    and the default's extrapolated harmonics by 0.083 %, after 7.75 revolutions in all (6.75
     and 1.0)."""
     from studies.hub import run
     from tests.test_symmetry import _harmonics
