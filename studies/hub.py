@@ -43,7 +43,7 @@ state, a few quarter revolutions at 2h are extrapolated to that step's periodic 
 are those shooting extrapolated at the step, so its iterates (the record's ``iterates``:
 those a restart was extrapolated from, and those marched since, near the periodic response)
 give the secant pairs of a Newton step to that response from the second coarse iterate on:
-1–1.5 revolutions at 2h, where the coarse iterates alone needed 2.5–4.25 to span the slow
+1–1.75 revolutions at 2h, where the coarse iterates alone needed 2.5–4.25 to span the slow
 modes (an estimate counts only while the pairs explain the coarse changes).
 The harmonics 0–8 at the two steps give the error estimate |c(h) − c(2h)|/15
 (:func:`studies.periodic.richardson`; /3 for the plain step), stored as
@@ -443,7 +443,7 @@ def run(params: dict[str, Any]) -> xr.Dataset:
         # most six revolutions of iterates: without shooting's iterates (a run that marched),
         # tuned to 2.8P the estimate needs 17 quarter revolutions (with 16 it stayed uncertain
         # and the step's 0.63 % error was archived); with them the 60 sweep cases stop after
-        # 4–6
+        # 4–7
         coarse = integrator(n_c)
         coarse.restore(integ.state())
         runs.append((coarse, n_c))
