@@ -252,11 +252,13 @@ def describing_response(p: dict[str, Any], holes) -> tuple[np.ndarray, np.ndarra
     Other hole shapes (designed against detuning) and locked bifilars: the linear response;
     also where the iteration does not settle (a jump between coexisting responses).
 
-    Not the default start (``initial_state = "describing"``): shooting from it is shorter
-    (the free case restarts after 6 quarter revolutions instead of 9; 5.25 revolutions in all
-    against 5.5, the two largest swings of issue 14's sweep 7.25 against 8.75 and 9.25), but
-    at 3.3P with 1.5 times the stiffness it needs a second restart (9.0 against 7.75), and it
-    was not measured over the whole sweep."""
+    Not the default start (``initial_state = "describing"``). Below 3P it is the better one
+    (the two largest swings of issue 14's sweep: 7.25 revolutions against 8.75 and 9.25; the
+    free case 5.25 against 5.5; the sweep's mean 6.25 against 6.6), but above 3P it starts
+    further from the periodic response than the linear start (3.3P with 1.5 times the
+    stiffness: first change 6.9e-2 against 2.9e-2, a second restart, 9.0 revolutions against
+    7.75): the stiffness alone is corrected, not the forcing, whose direction τ turns with φ.
+    A describing function of both is the next step."""
     base = linear_response(p, holes)
     if p["bifilar"] == "locked" or holes.shape != "circle":
         return base
