@@ -444,21 +444,19 @@ def run(params: dict[str, Any]) -> xr.Dataset:
         # harmonics against the recorded ones estimate the time-step error (Richardson). At
         # most six revolutions of iterates: without shooting's iterates (a run that marched),
         # tuned to 2.8P the estimate needs 17 quarter revolutions (with 16 it stayed uncertain
-        # and the step's 0.63 % error was archived); with them the 60 sweep cases stop after
-        # 4–7
+        # and the step's 0.63 % error was archived); with them, the slow modes known before the
+        # coarse iterates span them (at the coarse samples: every other step's), the 60 sweep
+        # cases stop after 4–7
         coarse = integrator(n_c)
         coarse.restore(integ.state())
         runs.append((coarse, n_c))
-        # the iterates shooting extrapolated, at the coarse samples (every other step's): the
-        # slow modes, known before the coarse iterates span them
         history = ([[align(b, j)[1::2] for b, j in run] for run in rec.iterates]
                    if nrev == 2 * n_c else None)
         try:
             rev, uncertainty, _ = sector_response(
                 coarse, sampler(coarse), align, n_sectors=n_sec, steps_per_rev=n_c,
                 reference=data, omega=omega, n_max=N_MAX, accuracy=ESTIMATE_ACCURACY,
-                max_iterates=6 * max(n_sec, 2), history=history,
-                min_iterates=4 if any(len(run) >= 3 for run in history or ()) else 6)
+                max_iterates=6 * max(n_sec, 2), history=history)
         except RuntimeError as exc:
             notes.append(f"no step-error estimate{unextrapolated}: {exc}")
         else:

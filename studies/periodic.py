@@ -700,7 +700,8 @@ def sector_response(integ, sample: Callable[[], Array], align: Callable[[Array, 
     omega
         Rotor speed (rad/s).
     n_max, min_iterates, max_iterates, accuracy, max_residual
-        Highest harmonic compared, least and most iterates, the stopping test's relative
+        Highest harmonic compared, least and most iterates (with a usable ``history`` at
+        least four, what three estimates to compare need), the stopping test's relative
         accuracy, and the largest unexplained part of a secant estimate over ``history``.
 
     Returns
@@ -745,6 +746,8 @@ def sector_response(integ, sample: Callable[[], Array], align: Callable[[Array, 
         if run.shape[1:] != (m, len(reference[0])):
             raise ValueError(f"history blocks must be {m} samples of {len(reference[0])} "
                              f"columns, got {run.shape[1:]}")
+    # with the slow modes known, the three estimates the test compares need only four iterates
+    least = min(min_iterates, 4) if past else min_iterates
     blocks: list[Array] = []
     estimates: list[tuple[Array, NDArray[np.complex128]]] = []
     while True:
@@ -782,6 +785,6 @@ def sector_response(integ, sample: Callable[[], Array], align: Callable[[Array, 
         uncertainty = spread / change if change > 0 else 0.0
         if past and unexplained > max_residual:  # out of iterates, the pairs still at odds
             uncertainty = max(uncertainty, unexplained)
-        if ((len(blocks) >= min_iterates and uncertainty <= accuracy)
+        if ((len(blocks) >= least and uncertainty <= accuracy)
                 or len(blocks) >= max_iterates):
             return rev, uncertainty, len(blocks)

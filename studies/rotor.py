@@ -493,9 +493,11 @@ def integrator(system: System, p: dict[str, Any], h: float, parts: RotorParts | 
     scale = None
     if parts is not None and wake_tolerance != 1.0:
         scale = np.ones(system.n)
-        for line in parts.lines:
-            o = system.offset[line]
-            scale[o : o + line.wake_states * line.n_sections] = wake_tolerance
+        lines = {id(line) for line in parts.lines}
+        for block in system.layout.blocks:  # each line's one state block: its wake states
+            if id(block.owner) in lines:
+                o = system.offset[block.owner]
+                scale[o : o + block.size] = wake_tolerance
     return make_integrator(system, p["scheme"], h, rho_inf=rho, tol=tol,
                            book_work=book_work, turning=spin, tolerance_scale=scale)
 
