@@ -89,8 +89,10 @@ from studies.absorbers import OUTPUTS as ABSORBER_OUTPUTS
 from studies.absorbers import PARAMETERS as ABSORBERS
 from studies.equivalent import equivalent_absorber
 from studies.harmonics import N_MAX
+from studies.holes import MAX_TANGENT_ANGLE
 from studies.parameters import ModelSpec, Output, Param, ParameterError
 from studies.periodic import march, richardson, sector_response, shoot, stepper, to_rotating
+from studies.reduced_hub import SAMPLES, ReducedHub, periodic_swing, tangent_angle
 
 Z = np.array([0.0, 0.0, 1.0])
 NEWTON_TOL = 1e-8  # relative Newton tolerance on q (m); see run()
@@ -104,6 +106,9 @@ ESTIMATE_ACCURACY = 0.1
 # the largest pin angle from which the linear start is used (rad): the linearization drops the
 # amplitude detuning, φ²/16 of the frequency for circular holes (1.7 % at 30°)
 LINEAR_START_LIMIT = np.radians(30.0)
+# the largest pin angle of the nonlinear start's periodic response (rad): the holes cover the
+# path to this turn of its tangent
+NONLINEAR_START_LIMIT = MAX_TANGENT_ANGLE
 DESCRIBING_ITERATIONS = 200  # fixed-point iterations of describing_response
 
 # UH-60-class values (public: 4 blades of 116.5 kg, R = 8.18 m, Ω = 27 rad/s). The hub mass,
@@ -133,13 +138,15 @@ PARAMETERS: dict[str, Param] = {
                       maximum=360.0),
     **{name: ABSORBERS[name] for name in ("arm_radius", "cm_offset", "tuning_mass", "pin_mass",
                                           "pin_diameter", "pin_inertia", "pin_damping_ratio")},
-    "initial_state": Param("linear", "1", "state at t = 0: linear (the closed-form "
-                           "periodic response of the linearized model: the hub's whirl and "
-                           "the bifilars' swing from their fixed-frame equivalent), describing "
-                           "(the same with circular holes' amplitude detuning: the swing's "
-                           "stiffness at its describing-function value) or rest (hub centred, "
-                           "bifilars at rest at their vertex)",
-                           choices=("describing", "linear", "rest")),
+    "initial_state": Param("nonlinear", "1", "state at t = 0: nonlinear (the periodic "
+                           "response of the hub on its swing coordinates, exact for rigid "
+                           "bifilars, by harmonic balance: studies.reduced_hub), linear (the "
+                           "closed-form periodic response of the linearized model: the hub's "
+                           "whirl and the bifilars' swing from their fixed-frame equivalent), "
+                           "describing (the same with circular holes' amplitude detuning: the "
+                           "swing's stiffness at its describing-function value) or rest (hub "
+                           "centred, bifilars at rest at their vertex)",
+                           choices=("describing", "linear", "nonlinear", "rest")),
     "steps_per_rev": Param(40, "1", "time steps per revolution (each of them `composition`'s "
                            "substeps)", minimum=16, maximum=20000),
     "composition": Param("suzuki", "1", "symmetric composition of the ep step into a "
@@ -290,12 +297,72 @@ def linear_start(p: dict[str, Any], holes, response=linear_response) -> Absorber
                          velocity=np.array([zd0.real, zd0.imag, 0.0]))
 
 
+def reduced_model(p: dict[str, Any], holes) -> ReducedHub:
+    """The hub model on swing coordinates (:mod:`studies.reduced_hub`): the same masses,
+    fuselage restraint, shears and rolling resistance as :func:`build`'s."""
+    g = holes.geometry
+    k, c = fuselage(p)
+    whirl, force = excitation(p)
+    m_z = (p["shaft_mass"] + p["rotor_mass"]
+           + N_BIFILARS * (g.tuning_mass + 2 * g.pin_mass))
+    return ReducedHub(holes, p["hub_speed"], AZIMUTHS, m_z, k, c, whirl, force,
+                      pin_damping(p, holes))
+
+
+def nonlinear_start(p: dict[str, Any], holes) -> tuple[AbsorberStart, float]:
+    """The state at t = 0 of the periodic response of :func:`reduced_model` (harmonic balance,
+    :func:`studies.reduced_hub.periodic_swing`, from :func:`linear_response`), and the largest
+    pin angle over its revolution (rad). Raises RuntimeError if the balance does not converge."""
+    omega = p["hub_speed"]
+    model = reduced_model(p, holes)
+    t = 2 * np.pi / omega * np.arange(SAMPLES) / SAMPLES
+    whirl, _, aa = linear_response(p, holes)
+    phi0 = np.real((aa[:, None] * np.exp(1j * np.outer(whirl, t))).sum(axis=0)
+                   * np.exp(-1j * (omega * t + AZIMUTHS[0])))
+    # σ ≈ φ / φ'(0) for the guess: the linear response knows only the vertex
+    sol = periodic_swing(model, phi0 / tangent_angle(holes, np.zeros(1))[1][0])
+    angles, rates = [], []
+    for j in range(N_BIFILARS):
+        phi, turn = tangent_angle(holes, sol.sigma(np.array([0.0]), k=j))
+        angles.append(phi[0])
+        rates.append(turn[0] * sol.sigma(np.array([0.0]), k=j, derivative=1)[0])
+    z0, zd0 = sol.center(0.0), sol.center(0.0, derivative=1)
+    swing = float(np.abs(tangent_angle(holes, sol.sigma(t))[0]).max())
+    return AbsorberStart(angles=np.array(angles), rates=np.array(rates),
+                         center=np.array([z0.real, z0.imag, 0.0]),
+                         velocity=np.array([zd0.real, zd0.imag, 0.0])), swing
+
+
 def initial_start(p: dict[str, Any], holes) -> tuple[AbsorberStart, str]:
     """The state the run starts from as ``initial_state`` says, and what the case message
-    should say about it: the linear start only where the linearization holds — finite, and
-    every pin within :data:`LINEAR_START_LIMIT` and on its hole — else rest."""
+    should say about it: the nonlinear start where the harmonic balance converges with every
+    pin within :data:`NONLINEAR_START_LIMIT`, else the linear one; the linear start only where
+    the linearization holds — finite, and every pin within :data:`LINEAR_START_LIMIT` and on
+    its hole — else rest."""
     if p["initial_state"] == "rest":
         return AbsorberStart(), ""
+    note = ""
+    if p["initial_state"] == "nonlinear" and p["bifilar"] == "free":
+        # (locked bifilars and the equivalent are linear: their linear start is exact)
+        try:
+            with np.errstate(all="ignore"):
+                start, swing = nonlinear_start(p, holes)
+        except RuntimeError as exc:
+            note = f"nonlinear start not found ({exc})"
+        else:
+            if swing <= NONLINEAR_START_LIMIT:
+                return start, ""
+            note = (f"nonlinear start not used: it swings the pins to {np.degrees(swing):.3g}°, "
+                    f"beyond the {np.degrees(NONLINEAR_START_LIMIT):g}° the holes cover")
+    start, reason = _linear_start_checked(p, holes)
+    if note and not reason:
+        reason = "started from the linear response"
+    return start, "; ".join(x for x in (note, reason) if x)
+
+
+def _linear_start_checked(p: dict[str, Any], holes) -> tuple[AbsorberStart, str]:
+    """The linear (or describing-function) start where the linearization holds, else rest and
+    why."""
     response = describing_response if p["initial_state"] == "describing" else linear_response
     with np.errstate(all="ignore"):  # a non-finite response is reported, not warned about
         start = linear_start(p, holes, response)

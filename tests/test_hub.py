@@ -190,29 +190,62 @@ def test_linear_start_only_where_the_linearization_holds(monkeypatch):
     message says why."""
     from studies import hub
 
-    p = SPEC.complete({"excitation_3p": 3e4})  # 20 times the default: 77° of swing
+    linear = {"initial_state": "linear"}
+    p = SPEC.complete({**linear, "excitation_3p": 3e4})  # 20 times the default: 77° of swing
     start, note = hub.initial_start(p, hub.holes_for(p))
     assert not np.any(start.angles) and not np.any(start.center)
     assert note == ("started at rest: the linear response swings the pins to 77.2°, beyond "
                     "the 30° where the linearization holds")
     monkeypatch.setattr(hub, "LINEAR_START_LIMIT", np.radians(1.0))
-    ds = hub.run({"error_estimate": False, "richardson": False})
+    ds = hub.run({**linear, "error_estimate": False, "richardson": False})
     assert ds.attrs["message"].startswith("started at rest: the linear response swings the "
                                           "pins to 3.42°, beyond the 1° where")
 
 
-def test_linear_start_is_nearly_periodic():
-    """Started from the linear response, the nonlinear bifilars' first two marched revolutions
-    differ by 0.9 % of the largest harmonics (what the linearization leaves out); started at
-    rest, by 81 %: the shooting then has only a small transient to remove."""
+def test_nonlinear_start_falls_back_with_its_reason(monkeypatch):
+    """Where the harmonic balance finds no periodic response (20 times the default shears:
+    the linear one swings the pins to 77°) or finds one beyond the holes, the run takes the
+    linear start where that holds, else rest, and the case message says both."""
+    from studies import hub
+
+    p = SPEC.complete({"excitation_3p": 3e4})
+    start, note = hub.initial_start(p, hub.holes_for(p))
+    assert not np.any(start.angles)
+    assert note.startswith("nonlinear start not found (the harmonic balance did not converge")
+    assert note.endswith("; started at rest: the linear response swings the pins to 77.2°, "
+                         "beyond the 30° where the linearization holds")
+    p = SPEC.complete({})
+    monkeypatch.setattr(hub, "NONLINEAR_START_LIMIT", np.radians(1.0))
+    start, note = hub.initial_start(p, hub.holes_for(p))
+    linear, _ = hub._linear_start_checked(p, hub.holes_for(p))
+    np.testing.assert_array_equal(start.angles, linear.angles)
+    assert note == ("nonlinear start not used: it swings the pins to 5.61°, beyond the 1° the "
+                    "holes cover; started from the linear response")
+    for other in ({"bifilar": "locked"}, {"bifilar": "equivalent"}):  # linear models: exact
+        q = SPEC.complete(other)
+        start, note = hub.initial_start(q, hub.holes_for(q))
+        assert note == ""
+        np.testing.assert_array_equal(start.center,
+                                      hub._linear_start_checked(q, hub.holes_for(q))[0].center)
+
+
+def test_nonlinear_and_linear_starts_are_nearly_periodic():
+    """Started from the reduced model's periodic response (nonlinear, the default), the
+    bifilars' first two marched revolutions differ by 0.14 % of the largest harmonics (the
+    time step's error alone: the start is the exact equations' periodic response); from the
+    linear response by 0.86 % (what the linearization leaves out); from rest by 81 %: the
+    shooting then has only a small transient to remove."""
     from studies.hub import run
 
     given = {"shooting_window": 0, "extrapolation_window": 0, "max_revolutions": 2,
-             "periodic_tolerance": 0.02, "error_estimate": False, "richardson": False}
-    ds = run(given)
-    assert ds.attrs["transient_revolutions"] == 2
-    with pytest.raises(RuntimeError, match="not periodic after 2 revolutions"):
-        run({**given, "initial_state": "rest"})
+             "error_estimate": False, "richardson": False}
+    for start, passes, fails in (("nonlinear", 2e-3, 1e-3), ("linear", 0.01, 5e-3),
+                                 ("rest", None, 0.02)):
+        if passes is not None:
+            ds = run({**given, "initial_state": start, "periodic_tolerance": passes})
+            assert ds.attrs["transient_revolutions"] == 2
+        with pytest.raises(RuntimeError, match="not periodic after 2 revolutions"):
+            run({**given, "initial_state": start, "periodic_tolerance": fails})
 
 
 def test_describing_function_start_has_the_circular_holes_amplitude_detuning():
