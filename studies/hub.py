@@ -22,38 +22,43 @@ rotation relative to its arm-side link, sized from a pendulum damping ratio; the
 transient then decays and the response is periodic when two successive revolutions give the
 same harmonics within ``periodic_tolerance``. Whole revolutions are then recorded.
 
-The run starts from the closed-form periodic response of the linearized model
-(``initial_state``, :func:`linear_response`: the bifilars as their fixed-frame equivalent, the
-hub's whirl and their swing), so only what the linearization leaves out is transient: the
-first two revolutions of a free case differ by 0.9 % (81 % from rest). The periodic response
-is then reached by shooting on the quarter-revolution map (the model is symmetric under a
-quarter turn of the hub with the bifilars permuted, :func:`symmetry`): the quarter-revolution
-iterates are extrapolated to their fixed point and the model restarts from it
-(:func:`studies.periodic.shoot`), 4.5 revolutions for a free case, recorded ones included
-(7.75 from rest, 24 by plain marching). The time integration is the energy-preserving ``ep``
-step, symmetric and of order 2, composed into a fourth-order step (``composition``, default
+The run starts from the periodic response of the same model written on its swing coordinates
+(``initial_state``, :func:`nonlinear_start`: :mod:`studies.reduced_hub`, the hub centre and each
+bifilar's path parameter, exact for rigid bodies rolling without sliding, solved by harmonic
+balance), so only the time step's error is transient: the first two revolutions of a free case
+differ by 0.14 % (0.86 % from the linear response, :func:`linear_response`; 81 % from rest).
+The periodic response is then reached by shooting on the quarter-revolution map (the model is
+symmetric under a quarter turn of the hub with the bifilars permuted, :func:`symmetry`): the
+quarter-revolution iterates are extrapolated to their fixed point and the model restarts from
+it (:func:`studies.periodic.shoot`), 5.5 revolutions for a free case, recorded ones included
+(4.5 from the linear start, 7.75 from rest, 24 by plain marching: the small transient the
+nonlinear start leaves spreads over more modes, but the restart then hits the periodic
+response to 2e-6 instead of 4e-4). The time integration is the energy-preserving ``ep`` step,
+symmetric and of order 2, composed into a fourth-order step (``composition``, default
 Suzuki's five substeps: :mod:`solver.composition`): at the default 40 steps/rev the harmonics
-0–8 are within 0.18 % of the step-converged ones on the free case (the plain ``ep`` at 160
-steps/rev: 3.3 %), at the cost of 200 substeps per revolution, but 0.885 % at 3.3P tuning with
-1.5 times the fuselage stiffness.
+0–8 are within 0.19 % of the exact equations' on the free case (the plain ``ep`` at 160
+steps/rev: 3.3 %), at the cost of 200 substeps per revolution, but 0.90 % at 3.3P tuning with
+1.5 times the fuselage stiffness (a 24° swing).
 
 So each run also computes the response at about twice the step: from the recorded run's end
 state, a few quarter revolutions at 2h are extrapolated to that step's periodic response
 (:func:`studies.periodic.sector_response`). The slow modes the coarse iterates relax along
 are those shooting extrapolated at the step, so its iterates (the record's ``iterates``:
-those a restart was extrapolated from, and those marched since, near the periodic response)
-give the secant pairs of a Newton step to that response from the second coarse iterate on:
-1–1.75 revolutions at 2h, where the coarse iterates alone needed 2.5–4.25 to span the slow
-modes (an estimate counts only while the pairs explain the coarse changes).
-The harmonics 0–8 at the two steps give the error estimate |c(h) − c(2h)|/15
-(:func:`studies.periodic.richardson`; /3 for the plain step), stored as
-``step_error_estimate`` (``error_estimate``): 1.70e-3 on the free case against its measured
-1.85e-3, 8.2e-3 against 8.8e-3 in that corner. With ``richardson`` (default) the recorded
-harmonics 0–8 are extrapolated to zero step, the h⁴ term of a composed run or the h² term of
-a plain one taken out: 1.7e-4 and 8.3e-4 from the step-converged harmonics in those two cases.
-A free case simulates 5.5 revolutions in all (4.5 at the step, 1.0 at 2h); the Table 1 cases
-4.25–6.0, the corner 7.75 and 2.8P tuning 7.25 (errors 0.63 % at the step, 0.091 %
-extrapolated); issue 14's 60-case sweep 6.6 on average, 2 cases above 8 (at most 9.25).
+those a restart was extrapolated from, and those marched since until they settled) give the
+secant pairs of a Newton step to that response from the second coarse iterate on: 1–1.75
+revolutions at 2h, where the coarse iterates alone needed 2.5–4.25 to span the slow modes (an
+estimate counts only while the pairs explain the coarse changes). The harmonics 0–8 at the two
+steps give the error estimate |c(h) − c(2h)|/15 (:func:`studies.periodic.richardson`; /3 for
+the plain step), stored as ``step_error_estimate`` (``error_estimate``): 1.71e-3 on the free
+case against its measured 1.92e-3, 7.9e-3 against 9.0e-3 in that corner. With ``richardson``
+(default) the recorded harmonics 0–8 are extrapolated to zero step, the h⁴ term of a composed
+run or the h² term of a plain one taken out: 2.3e-4 and 1.5e-3 from the exact equations'
+harmonics in those two cases.
+
+Measured against the harmonic balance over issue 14's 60-case sweep (tuning 2.7–3.3P, 0.5–1.5
+times the fuselage stiffness, swings 2–24°): 6.4 revolutions per case on average, at most
+8.0 (the corner), every case restarting once or twice; extrapolated harmonics within 1.9e-3,
+median 4.0e-4. The Table 1 cases take 4.25–5.75 revolutions.
 """
 
 from __future__ import annotations
@@ -92,7 +97,14 @@ from studies.harmonics import N_MAX
 from studies.holes import MAX_TANGENT_ANGLE
 from studies.parameters import ModelSpec, Output, Param, ParameterError
 from studies.periodic import march, richardson, sector_response, shoot, stepper, to_rotating
-from studies.reduced_hub import SAMPLES, ReducedHub, periodic_swing, tangent_angle
+from studies.reduced_hub import (
+    SAMPLES,
+    PeriodicSwing,
+    ReducedHub,
+    path_terms,
+    periodic_swing,
+    tangent_angle,
+)
 
 Z = np.array([0.0, 0.0, 1.0])
 NEWTON_TOL = 1e-8  # relative Newton tolerance on q (m); see run()
@@ -265,7 +277,7 @@ def describing_response(p: dict[str, Any], holes) -> tuple[np.ndarray, np.ndarra
     further from the periodic response than the linear start (3.3P with 1.5 times the
     stiffness: first change 6.9e-2 against 2.9e-2, a second restart, 9.0 revolutions against
     7.75): the stiffness alone is corrected, not the forcing, whose direction τ turns with φ.
-    A describing function of both is the next step."""
+    The nonlinear start (:func:`nonlinear_start`, the default) has both, exactly."""
     base = linear_response(p, holes)
     if p["bifilar"] == "locked" or holes.shape != "circle":
         return base
@@ -309,24 +321,50 @@ def reduced_model(p: dict[str, Any], holes) -> ReducedHub:
                       pin_damping(p, holes))
 
 
-def nonlinear_start(p: dict[str, Any], holes) -> tuple[AbsorberStart, float]:
-    """The state at t = 0 of the periodic response of :func:`reduced_model` (harmonic balance,
-    :func:`studies.reduced_hub.periodic_swing`, from :func:`linear_response`), and the largest
-    pin angle over its revolution (rad). Raises RuntimeError if the balance does not converge."""
+def reduced_response(p: dict[str, Any], holes, **kw) -> PeriodicSwing:
+    """The periodic response of :func:`reduced_model` by harmonic balance
+    (:func:`studies.reduced_hub.periodic_swing`, options ``kw``), from :func:`linear_response`
+    (σ ≈ φ/φ'(0): the linear response knows only the vertex). Raises RuntimeError if the
+    balance does not converge."""
     omega = p["hub_speed"]
-    model = reduced_model(p, holes)
-    t = 2 * np.pi / omega * np.arange(SAMPLES) / SAMPLES
+    m = kw.get("samples", SAMPLES)
+    t = 2 * np.pi / omega * np.arange(m) / m
     whirl, _, aa = linear_response(p, holes)
     phi0 = np.real((aa[:, None] * np.exp(1j * np.outer(whirl, t))).sum(axis=0)
                    * np.exp(-1j * (omega * t + AZIMUTHS[0])))
-    # σ ≈ φ / φ'(0) for the guess: the linear response knows only the vertex
-    sol = periodic_swing(model, phi0 / tangent_angle(holes, np.zeros(1))[1][0])
+    return periodic_swing(reduced_model(p, holes),
+                          phi0 / tangent_angle(holes, np.zeros(1))[1][0], **kw)
+
+
+def reduced_samples(p: dict[str, Any], holes, t: np.ndarray, **kw) -> np.ndarray:
+    """The run's sampled rows at times ``t`` (s) — time, hub centre x, y (m) and the force on
+    the fuselage x, y (N), fixed frame; the tuning masses' centre of mass x, y (m); the pin
+    angles (degree) — from :func:`reduced_response`: the exact equations' periodic response, a
+    reference for :func:`run`'s that shares none of its numerics."""
+    sol = reduced_response(p, holes, **kw)
+    k, c = fuselage(p)
+    z, zd = sol.center(t), sol.center(t, derivative=1)
+    f = k * z + c * zd
+    sigmas = [sol.sigma(t, k=j) for j in range(N_BIFILARS)]
+    cm = z + np.mean([np.exp(1j * (p["hub_speed"] * t + a)) * path_terms(holes, s)[0]
+                      for a, s in zip(AZIMUTHS, sigmas, strict=True)], axis=0)
+    pins = [np.degrees(tangent_angle(holes, s)[0]) for s in sigmas]
+    return np.column_stack([t, z.real, z.imag, f.real, f.imag, cm.real, cm.imag, *pins])
+
+
+def nonlinear_start(p: dict[str, Any], holes) -> tuple[AbsorberStart, float]:
+    """The state at t = 0 of :func:`reduced_response`, and the largest pin angle over its
+    revolution (rad). Raises RuntimeError if the balance does not converge."""
+    omega = p["hub_speed"]
+    sol = reduced_response(p, holes)
+    t0 = np.zeros(1)
     angles, rates = [], []
     for j in range(N_BIFILARS):
-        phi, turn = tangent_angle(holes, sol.sigma(np.array([0.0]), k=j))
+        phi, turn = tangent_angle(holes, sol.sigma(t0, k=j))
         angles.append(phi[0])
-        rates.append(turn[0] * sol.sigma(np.array([0.0]), k=j, derivative=1)[0])
+        rates.append(turn[0] * sol.sigma(t0, k=j, derivative=1)[0])
     z0, zd0 = sol.center(0.0), sol.center(0.0, derivative=1)
+    t = 2 * np.pi / omega * np.arange(SAMPLES) / SAMPLES
     swing = float(np.abs(tangent_angle(holes, sol.sigma(t))[0]).max())
     return AbsorberStart(angles=np.array(angles), rates=np.array(rates),
                          center=np.array([z0.real, z0.imag, 0.0]),

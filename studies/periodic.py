@@ -212,8 +212,8 @@ class PeriodicRecord:
     samples of the iterates the last restart was extrapolated from, each with its phase (sector
     periods since t = 0 at its end), one list per window (the last restarts' with
     ``secant``), then the iterates marched since the last restart (near the periodic
-    response, where the map is nearly linear): a record of the slow modes for
-    :func:`sector_response`.
+    response, where the map is nearly linear) until they settled below a tenth of the
+    tolerance: a record of the slow modes for :func:`sector_response`.
     """
 
     samples: Array
@@ -405,6 +405,10 @@ def shoot(integ, sample: Callable[[], Array], signals: Callable[[Array], Array],
     The periodicity test is :func:`march`'s: the harmonics of two successive whole revolutions
     marched since the last restart change by at most ``tolerance``; the recorded revolutions
     are the last ``revolutions`` of those (all marched from one state, none extrapolated).
+    Before the first restart the test waits while a restart may still come — until the
+    iterates' changes settle below a tenth of the tolerance (where no restart is tried) or a
+    whole ``window`` has gone by — since from a start near the periodic response the change
+    between revolutions shows only the decay of the start's error, not the error.
     After ``max_restarts`` restarts without passing it, the model marches on from the last
     state (time marching as the fallback), and the record's note says so.
 

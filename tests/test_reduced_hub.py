@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 from studies import hub
-from studies.absorbers import AZIMUTHS, N_BIFILARS
+from studies.absorbers import AZIMUTHS
 from studies.hub import SPEC
-from studies.periodic import referred_harmonics, to_rotating
+from studies.periodic import referred_harmonics
 from studies.reduced_hub import periodic_swing, tangent_angle
 
 # tuned below the rotating 3P with a soft fuselage: the sweep's largest swing below 3P, 16.6°
@@ -19,13 +19,7 @@ LARGE_SWING = {"tuning_order": 2.864, "fuselage_stiffness_scale": 0.75}
 def _solve(given: dict, **kw):
     p = SPEC.complete(given)
     holes = hub.holes_for(p)
-    m = kw.get("samples", 64)
-    t = 2 * np.pi / p["hub_speed"] * np.arange(m) / m
-    whirl, zz, aa = hub.linear_response(p, holes)
-    phi0 = np.real((aa[:, None] * np.exp(1j * np.outer(whirl, t))).sum(axis=0)
-                   * np.exp(-1j * (p["hub_speed"] * t + AZIMUTHS[0])))
-    guess = phi0 / tangent_angle(holes, np.zeros(1))[1][0]
-    return p, holes, periodic_swing(hub.reduced_model(p, holes), guess, **kw), (whirl, zz, aa)
+    return p, holes, hub.reduced_response(p, holes, **kw), hub.linear_response(p, holes)
 
 
 @pytest.mark.parametrize("hole", ["circle", "cycloid", "epicycloid"])
@@ -65,28 +59,19 @@ def test_multibody_hub_has_the_reduced_models_periodic_response_at_large_swing()
     """Two independent computations of the same physics at a 16.6° swing: the multibody hub
     (curve sliding joints, rolling, arc-length constraints; 80 steps/rev, Richardson, a 1e-4
     periodicity tolerance) and the harmonic balance of the swing-coordinate equations. Their
-    harmonics 0–8 of the hub motion (rotating frame), the fuselage forces and the pin angles
-    agree to 1.1e-4 of each signal's largest (3e-4 asserted; the multibody's periodicity
-    tolerance and O(h⁶) remainder), where the linear response errs by 19 % (the 3P swing
-    13.3° instead of 16.4°): the amplitude detuning and the turning forcing direction are
-    right in both."""
+    harmonics 0–8 of every sampled signal — hub motion, fuselage force, the tuning masses'
+    centre of mass, the pin angles — agree to 1.1e-4 of each signal's largest (3e-4 asserted;
+    the multibody's periodicity tolerance and O(h⁶) remainder), where the linear response errs
+    by 19 % (the 3P swing 13.3° instead of 16.4°): the amplitude detuning and the turning
+    forcing direction are right in both."""
+    from tests.test_hub import _samples
+
     p, holes, sol, (_, _, aa) = _solve(LARGE_SWING)
-    ds = hub.run({**LARGE_SWING, "steps_per_rev": 80, "periodic_tolerance": 1e-4,
-                  "initial_state": "linear"})
+    ds = hub.run({**LARGE_SWING, "steps_per_rev": 80, "periodic_tolerance": 1e-4})
     assert ds.attrs["message"] == "" and ds.attrs["richardson"] == 1
-    omega = p["hub_speed"]
-    k, c = hub.fuselage(p)
-    n = ds.attrs["samples_per_rev"]
-    t = ds.time.values[-n:]
-    z, zd = sol.center(t), sol.center(t, derivative=1)
-    f = k * z + c * zd
-    pins = [np.degrees(tangent_angle(holes, sol.sigma(t, k=j))[0]) for j in range(N_BIFILARS)]
-    reduced = np.column_stack([t, *to_rotating(omega, t, z.real, z.imag), f.real, f.imag,
-                               *pins])
-    multibody = np.column_stack([t, *(ds[key].values[..., -n:].T for key in (
-        "hub_x_rotating", "hub_y_rotating", "hub_force_x_fixed", "hub_force_y_fixed",
-        "pin_angle"))])
-    a, b = (referred_harmonics(rows, omega, 8) for rows in (multibody, reduced))
+    multibody = _samples(ds)[-80:]
+    reduced = hub.reduced_samples(p, holes, multibody[:, 0])
+    a, b = (referred_harmonics(rows, p["hub_speed"], 8) for rows in (multibody, reduced))
     scale = np.abs(b).max(axis=0)
     assert np.max(np.abs(a - b) / scale) < 3e-4
     swing = 2 * np.degrees(np.abs(sol.swing[3])) / tangent_angle(holes, np.zeros(1))[1][0]
