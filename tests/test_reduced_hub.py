@@ -55,27 +55,33 @@ def test_harmonic_balance_converges_in_the_harmonics():
                                atol=2e-9)
 
 
-def test_multibody_hub_has_the_reduced_models_periodic_response_at_large_swing():
+@pytest.mark.parametrize("hole", ["circle", pytest.param("cycloid", marks=pytest.mark.slow),
+                                  pytest.param("epicycloid", marks=pytest.mark.slow)])
+def test_multibody_hub_has_the_reduced_models_periodic_response_at_large_swing(hole):
     """Two independent computations of the same physics at a 16.6° swing: the multibody hub
     (curve sliding joints, rolling, arc-length constraints; 80 steps/rev, Richardson, a 1e-4
     periodicity tolerance) and the harmonic balance of the swing-coordinate equations. Their
     harmonics 0–8 of every sampled signal — hub motion, fuselage force, the tuning masses'
-    centre of mass, the pin angles — agree to 1.1e-4 of each signal's largest (3e-4 asserted;
+    centre of mass, the pin angles — agree to 1.5e-4 of each signal's largest (3e-4 asserted;
     the multibody's periodicity tolerance and O(h⁶) remainder), where the linear response errs
     by 19 % (the 3P swing 13.3° instead of 16.4°): the amplitude detuning and the turning
-    forcing direction are right in both."""
+    forcing direction are right in both. The same for cycloidal and epicycloidal holes (slow
+    tier), whose path speed |Γ'| varies along the swing: measured 1.6e-5 and 1.5e-5."""
     from tests.test_hub import _samples
 
-    p, holes, sol, (_, _, aa) = _solve(LARGE_SWING)
-    ds = hub.run({**LARGE_SWING, "steps_per_rev": 80, "periodic_tolerance": 1e-4})
+    given = {**LARGE_SWING, "hole": hole}
+    p, holes, sol, (_, _, aa) = _solve(given)
+    ds = hub.run({**given, "steps_per_rev": 80, "periodic_tolerance": 1e-4})
     assert ds.attrs["message"] == "" and ds.attrs["richardson"] == 1
     multibody = _samples(ds)[-80:]
     reduced = hub.reduced_samples(p, holes, multibody[:, 0])
     a, b = (referred_harmonics(rows, p["hub_speed"], 8) for rows in (multibody, reduced))
     scale = np.abs(b).max(axis=0)
     assert np.max(np.abs(a - b) / scale) < 3e-4
-    swing = 2 * np.degrees(np.abs(sol.swing[3])) / tangent_angle(holes, np.zeros(1))[1][0]
-    assert 16.3 < swing < 16.5 and np.degrees(np.abs(aa[0])) < 13.5
+    swing = 2 * np.degrees(np.abs(sol.swing[3])) * tangent_angle(holes, np.zeros(1))[1][0]
+    assert np.degrees(np.abs(aa[0])) < 13.5
+    if hole == "circle":
+        assert 16.3 < swing < 16.5
 
 
 def test_bad_sampling_is_refused():
