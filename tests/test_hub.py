@@ -295,7 +295,7 @@ def test_default_run_stores_the_step_error_of_its_harmonics():
     the step, extrapolated from a few quarter-revolution iterates started on its own periodic
     state. Against the same Richardson estimate from an independent run at twice the step
     (shot from rest, to the periodicity test's tolerance) it agrees within 3 % (measured
-    1.699e-3 against 1.701e-3), after one revolution at twice the step (the slow modes taken
+    1.711e-3 against 1.709e-3), after one revolution at twice the step (the slow modes taken
     from shooting's iterates). By default the
     recorded harmonics are then extrapolated to zero step, exactly by the correction the
     estimate measures; with ``richardson = false`` they are the step's own."""
@@ -304,7 +304,7 @@ def test_default_run_stores_the_step_error_of_its_harmonics():
 
     own = run({"richardson": False})
     assert own.attrs["message"] == "" and own.attrs["estimate_samples_per_rev"] == 20
-    # issue 13: at most 8 revolutions per case, the coarser step's included (measured 5.5)
+    # issue 13: at most 8 revolutions per case, the coarser step's included (measured 6.5)
     assert own.attrs["simulated_revolutions"] <= 8
     assert 1.0 <= own.attrs["estimate_revolutions"] <= 4.0 and own.attrs["richardson"] == 0
     coarse = run({"steps_per_rev": 20, "richardson": False, "error_estimate": False})
@@ -362,7 +362,7 @@ def test_default_step_gives_the_exact_harmonics_in_at_most_8_revolutions():
     (5.5 at the step, recorded ones included, and 1.0 at twice the step for the estimate); the
     stored estimate is that error within 25 % (measured 1.71e-3 against 1.92e-3), and the
     default's extrapolated harmonics err by 2.3e-4. The composed step is of order 4 on the
-    harmonics: 24 → 48 steps/rev take the error from 1.4e-2 to 8e-4 (log2 ratio 4.1).
+    harmonics: 24 → 48 steps/rev take the error from 1.4e-2 to 9.4e-4 (log2 ratio 3.88).
     Tuned to 3.3P with 1.5 times the fuselage stiffness (a corner of issue 14's sweep, its
     largest swing, 24°) the step errs by 0.90 %, which the estimate flags (7.9e-3), and the
     default's extrapolated harmonics by 0.15 %, after 8.0 revolutions in all (6.25 and 1.75)."""
