@@ -86,6 +86,8 @@ def test_multibody_hub_has_the_reduced_models_periodic_response_at_large_swing(h
 
 def test_bad_sampling_is_refused():
     p = SPEC.complete({})
-    holes = hub.holes_for(p)
+    model = hub.reduced_model(p, hub.holes_for(p))
     with pytest.raises(ValueError, match="samples = 30 must be a multiple of the 4 sectors"):
-        periodic_swing(hub.reduced_model(p, holes), np.zeros(30), samples=30)
+        periodic_swing(model, np.zeros(30), samples=30)
+    with pytest.raises(ValueError, match=r"guess has shape \(32,\): must be \(64,\)"):
+        periodic_swing(model, np.zeros(32))
