@@ -50,15 +50,15 @@ revolutions at 2h, where the coarse iterates alone needed 2.5–4.25 to span the
 estimate counts only while the pairs explain the coarse changes). The harmonics 0–8 at the two
 steps give the error estimate |c(h) − c(2h)|/15 (:func:`studies.periodic.richardson`; /3 for
 the plain step), stored as ``step_error_estimate`` (``error_estimate``): 1.71e-3 on the free
-case against its measured 1.92e-3, 7.9e-3 against 9.0e-3 in that corner. With ``richardson``
+case against its measured 1.92e-3, 8.0e-3 against 9.0e-3 in that corner. With ``richardson``
 (default) the recorded harmonics 0–8 are extrapolated to zero step, the h⁴ term of a composed
-run or the h² term of a plain one taken out: 2.3e-4 and 1.5e-3 from the exact equations'
+run or the h² term of a plain one taken out: 2.3e-4 and 1.2e-3 from the exact equations'
 harmonics in those two cases.
 
 Measured against the harmonic balance over issue 14's 60-case sweep (tuning 2.7–3.3P, 0.5–1.5
 times the fuselage stiffness, swings 2–24°): 6.4 revolutions per case on average, at most
-8.0 (the corner), every case restarting once or twice; extrapolated harmonics within 1.9e-3,
-median 4.0e-4. The Table 1 cases take 4.25–5.75 revolutions.
+7.25, every case restarting once or twice; extrapolated harmonics within 2.2e-3, median
+4.1e-4. The Table 1 cases take 4.25–5.75 revolutions.
 """
 
 from __future__ import annotations

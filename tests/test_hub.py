@@ -364,8 +364,8 @@ def test_default_step_gives_the_exact_harmonics_in_at_most_8_revolutions():
     default's extrapolated harmonics err by 2.3e-4. The composed step is of order 4 on the
     harmonics: 24 → 48 steps/rev take the error from 1.4e-2 to 9.4e-4 (log2 ratio 3.88).
     Tuned to 3.3P with 1.5 times the fuselage stiffness (a corner of issue 14's sweep, its
-    largest swing, 24°) the step errs by 0.90 %, which the estimate flags (7.9e-3), and the
-    default's extrapolated harmonics by 0.15 %, after 8.0 revolutions in all (6.25 and 1.75)."""
+    largest swing, 24°) the step errs by 0.90 %, which the estimate flags (8.0e-3), and the
+    default's extrapolated harmonics by 0.12 %, after 7.25 revolutions in all (6.25 and 1.0)."""
     from studies.hub import run
 
     error = _exact_error({})
@@ -392,8 +392,8 @@ def test_issue14_sweep_takes_at_most_8_revolutions_per_case_at_the_exact_harmoni
     14's 60-case sweep (tuning 2.7–3.3P in 12 steps, 0.5–1.5 times the fuselage stiffness,
     swings 2–24°, the fuselage mode at the 4P tone at 1.25 times), with the default run's
     accuracy against the exact equations' periodic response. Measured: 6.4 revolutions on
-    average, at most 8.0 (the 3.3P, 1.5 × corner); every case restarts once or twice; the
-    extrapolated harmonics within 1.9e-3 of the exact ones (median 4.0e-4; issue 13 asks for
+    average, at most 7.25; every case restarts once or twice; the extrapolated harmonics
+    within 2.2e-3 of the exact ones (median 4.1e-4; issue 13 asks for
     5e-3)."""
     from studies.hub import run
 
