@@ -472,8 +472,9 @@ def shoot(integ, sample: Callable[[], Array], signals: Callable[[Array], Array],
         # change of a vibratory one, as in the periodicity test)
         return np.abs(o - o.mean(axis=0) if separate_mean else o).max(axis=0)
 
-    def unsettled(run: list[tuple[Array, int]]) -> list[tuple[Array, int]]:
-        # the run up to its first iterate that changed by at most the tolerance (what a secant
+    def unsettled(run: list[tuple[Array, int]], seen: list[Array]) -> list[tuple[Array, int]]:
+        # the run (``seen``: its blocks' observations) up to its first iterate that changed by
+        # at most the tolerance (what a secant
         # restart leaves to the periodicity test, above): after a restart that hit, its pairs
         # describe the noise and the last percent of the transient, not the slow modes. On the
         # hub tuned to 3.19P with 1.25 times the fuselage stiffness, restarted to 6e-6, the
@@ -481,11 +482,10 @@ def shoot(integ, sample: Callable[[], Array], signals: Callable[[Array], Array],
         # nonlinear start, at most 7.25 revolutions a case against 8.0 with those changing by
         # more than a tenth of the tolerance kept, the harmonics' largest error 2.2e-3
         # against 1.9e-3
-        o = [observe(b, j) for b, j in run]
-        for i in range(1, len(o)):
-            scale = observed_scale(o[i])
+        for i in range(1, len(seen)):
+            scale = observed_scale(seen[i])
             live = scale > 0
-            if np.max(np.abs(o[i] - o[i - 1])[:, live] / scale[live]) <= tolerance:
+            if np.max(np.abs(seen[i] - seen[i - 1])[:, live] / scale[live]) <= tolerance:
                 return run[: i + 1]
         return run
 
@@ -530,7 +530,7 @@ def shoot(integ, sample: Callable[[], Array], signals: Callable[[Array], Array],
                         "periodic response")
                 return PeriodicRecord(rec, int(np.ceil(revs_done - revolutions)), change,
                                       residual=residual, restarts=restarts, note=note,
-                                      iterates=[*history, unsettled(raw)])
+                                      iterates=[*history, unsettled(raw, obs)])
         if revs_done >= max_revolutions:
             raise RuntimeError(f"response not periodic after {max_revolutions} revolutions "
                                f"({restarts} shooting restarts; last change {change:.2e} > "

@@ -136,22 +136,27 @@ def path_terms(holes: Holes, sigma: Array) -> tuple[NDArray[np.complex128], ...]
             (c(holes.dpath(s + e)) - c(holes.dpath(s - e))) / (2 * e))
 
 
+def _turn_rate(d1: NDArray[np.complex128], d2: NDArray[np.complex128]) -> Array:
+    """dφ/dσ, the rate at which Γ's tangent turns, from Γ' and Γ''."""
+    return np.imag(np.conj(d1) * d2) / np.abs(d1) ** 2
+
+
 def tangent_angle(holes: Holes, sigma: Array) -> tuple[Array, Array]:
     """φ(σ), the turn of Γ's tangent from the vertex's (rad: the pin angle), and dφ/dσ."""
     _, d1, d2 = path_terms(holes, sigma)
-    return np.angle(-1j * d1), np.imag(np.conj(d1) * d2) / np.abs(d1) ** 2
+    return np.angle(-1j * d1), _turn_rate(d1, d2)
 
 
-def _swing_residual(model: ReducedHub, sig: Array, sig_d: Array, sig_dd: Array,
-                    zdd: NDArray[np.complex128], psi: Array) -> Array:
-    """The swing equation's residual (N·m) of one bifilar (see the module docstring)."""
+def _swing_residual(model: ReducedHub, terms: tuple[NDArray[np.complex128], ...], sig_d: Array,
+                    sig_dd: Array, zdd: NDArray[np.complex128], psi: Array) -> Array:
+    """The swing equation's residual (N·m) of one bifilar (see the module docstring), with
+    ``terms`` Γ, Γ', Γ'' at its path parameter (:func:`path_terms`)."""
     g = model.holes.geometry
-    gam, d1, d2 = path_terms(model.holes, sig)
+    gam, d1, d2 = terms
     pi = _pin_center(model.holes, gam)
     c_j = g.tuning_mass + 0.5 * g.pin_mass + 2 * g.pin_inertia / g.pin_diameter**2
     speed2 = np.abs(d1) ** 2
-    turn = np.imag(np.conj(d1) * d2) / speed2  # φ'(σ)
-    rel = np.sqrt(speed2) / g.pin_diameter + turn  # pin turn relative to its link, per σ
+    rel = np.sqrt(speed2) / g.pin_diameter + _turn_rate(d1, d2)  # pin turn relative to link
     return (c_j * speed2 * sig_dd + c_j * np.real(np.conj(d1) * d2) * sig_d**2
             - model.hub_speed**2 * np.real(np.conj(g.tuning_mass * gam + g.pin_mass * pi) * d1)
             + (g.tuning_mass + g.pin_mass) * np.real(np.conj(zdd) * np.exp(1j * psi) * d1)
@@ -159,9 +164,10 @@ def _swing_residual(model: ReducedHub, sig: Array, sig_d: Array, sig_dd: Array,
 
 
 def _pin_center(holes: Holes, gam: NDArray[np.complex128]) -> NDArray[np.complex128]:
-    """π = π0 + (Γ − Γ0)/2 (m, complex): the pin centre midway between the holes."""
-    v = holes.vertex
-    return holes.geometry.arm_radius + 0.5 * holes.rho_v + 0.5 * (gam - (v[0] + 1j * v[1]))
+    """π = π0 + (Γ − Γ0)/2 (m, complex): the pin centre midway between the holes
+    (:meth:`studies.holes.Holes.pin_center`, here from Γ already evaluated)."""
+    (p0x, p0y), (vx, vy) = holes.pin_center(0.0), holes.vertex
+    return p0x + 1j * p0y + 0.5 * (gam - (vx + 1j * vy))
 
 
 def periodic_swing(model: ReducedHub, guess: Array, harmonics: int = HARMONICS,
@@ -209,13 +215,12 @@ def periodic_swing(model: ReducedHub, guess: Array, harmonics: int = HARMONICS,
     def spectrum(x: Array) -> NDArray[np.complex128]:
         return np.concatenate([x[:1], x[1::2] + 1j * x[2::2]])
 
-    def hub_of(sig: Array, fraction: float = 1.0) -> NDArray[np.complex128]:
-        # z's harmonics (signed orders of the samples) under a fraction of the shears
-        reaction = 0.0
-        for k, psi in enumerate(psis):
-            gam = path_terms(model.holes, np.roll(sig, -k * shift))[0]
-            reaction = reaction + np.exp(1j * psi) * (
-                g.tuning_mass * gam + 2 * g.pin_mass * _pin_center(model.holes, gam))
+    def hub_of(gam: NDArray[np.complex128], fraction: float = 1.0) -> NDArray[np.complex128]:
+        # z's harmonics (signed orders of the samples) under a fraction of the shears, from
+        # bifilar 0's Γ at the samples: bifilar k's is the same a sector later (rolled)
+        moment = g.tuning_mass * gam + 2 * g.pin_mass * _pin_center(model.holes, gam)
+        reaction = sum(np.exp(1j * psi) * np.roll(moment, -k * shift)
+                       for k, psi in enumerate(psis))
         return hub_gain * (fraction * tones + w**2 * np.fft.fft(reaction) / m)
 
     def fields(x: Array) -> tuple[Array, Array, Array]:  # σ_0, σ̇_0, σ̈_0 at the samples
@@ -228,15 +233,15 @@ def periodic_swing(model: ReducedHub, guess: Array, harmonics: int = HARMONICS,
 
     def residual(x: Array, fraction: float) -> Array:
         sig, sig_d, sig_dd = fields(x)
-        zdd = np.fft.ifft(-(w**2) * hub_of(sig, fraction)) * m
-        r = np.fft.rfft(_swing_residual(model, sig, sig_d, sig_dd, zdd, psis[0]))[n] / (m * stiff)
+        terms = path_terms(model.holes, sig)
+        zdd = np.fft.ifft(-(w**2) * hub_of(terms[0], fraction)) * m
+        r = np.fft.rfft(_swing_residual(model, terms, sig_d, sig_dd, zdd, psis[0]))[n] / (m * stiff)
         return np.concatenate([r[:1].real, np.column_stack([r[1:].real, r[1:].imag]).ravel()])
 
     s0 = np.fft.rfft(np.asarray(guess, dtype=float))[n] / m
     x0 = np.concatenate([s0[:1].real, np.column_stack([s0[1:].real, s0[1:].imag]).ravel()])
     sol = _solve(residual, x0)
-    sig = fields(sol)[0]
-    zz = hub_of(sig)
+    zz = hub_of(path_terms(model.holes, fields(sol)[0])[0])
     orders = full[hub_live | (full == 0)]
     keep = np.argsort(orders)
     idx = np.nonzero(hub_live | (full == 0))[0][keep]
