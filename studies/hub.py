@@ -64,12 +64,10 @@ times the fuselage stiffness, swings 2–24°): 6.4 revolutions per case on aver
 from __future__ import annotations
 
 import time
-from dataclasses import replace
 from typing import Any
 
 import numpy as np
 import xarray as xr
-from scipy.special import j1
 
 from solver.bodies import RigidBody, ground
 from solver.composition import COMPOSITIONS, Composed
@@ -121,7 +119,6 @@ LINEAR_START_LIMIT = np.radians(30.0)
 # the largest pin angle of the nonlinear start's periodic response (rad): the holes cover the
 # path to this turn of its tangent
 NONLINEAR_START_LIMIT = MAX_TANGENT_ANGLE
-DESCRIBING_ITERATIONS = 200  # fixed-point iterations of describing_response
 
 # UH-60-class values (public: 4 blades of 116.5 kg, R = 8.18 m, Ω = 27 rad/s). The hub mass,
 # shaft-head mass and fuselage restraint are assumptions: the fuselage in-plane mode at the hub
@@ -154,11 +151,9 @@ PARAMETERS: dict[str, Param] = {
                            "response of the hub on its swing coordinates, exact for rigid "
                            "bifilars, by harmonic balance: studies.reduced_hub), linear (the "
                            "closed-form periodic response of the linearized model: the hub's "
-                           "whirl and the bifilars' swing from their fixed-frame equivalent), "
-                           "describing (the same with circular holes' amplitude detuning: the "
-                           "swing's stiffness at its describing-function value) or rest (hub "
-                           "centred, bifilars at rest at their vertex)",
-                           choices=("describing", "linear", "nonlinear", "rest")),
+                           "whirl and the bifilars' swing from their fixed-frame equivalent) "
+                           "or rest (hub centred, bifilars at rest at their vertex)",
+                           choices=("linear", "nonlinear", "rest")),
     "steps_per_rev": Param(40, "1", "time steps per revolution (each of them `composition`'s "
                            "substeps)", minimum=16, maximum=20000),
     "composition": Param("suzuki", "1", "symmetric composition of the ep step into a "
@@ -225,8 +220,7 @@ def excitation(p: dict[str, Any]) -> tuple[np.ndarray, np.ndarray]:
                       p["excitation_5p"] * np.exp(-1j * np.radians(p["phase_5p"]))]))
 
 
-def linear_response(p: dict[str, Any], holes, stiffness_factor: float = 1.0
-                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def linear_response(p: dict[str, Any], holes) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The periodic response of the linearized hub model, in closed form: per tone of the
     shears (:func:`excitation`) its whirl frequency ω (rad/s), the hub's whirl amplitude Z (m,
     complex: z = Σ Z e^{iωt}, fixed frame) and the bifilars' swing whirl amplitude Â (rad:
@@ -240,15 +234,12 @@ def linear_response(p: dict[str, Any], holes, stiffness_factor: float = 1.0
     cleared, Z = F D / Δ and Â = F S / Δ with Δ = D K0 − i ω² B (N/2) S: finite also for an
     undamped absorber tuned to a tone (D = 0), which then cancels it (Z = 0,
     Â = 2iF/(ω² N B)). Not finite only at an undamped resonance of the coupled system.
-    ``stiffness_factor`` multiplies the swing's stiffness K = ñ²Ω²J (:func:`describing_response`).
     """
     omega = p["hub_speed"]
     whirl, force = excitation(p)
     k, c = fuselage(p)
     locked = p["bifilar"] == "locked"
     absorber = equivalent_absorber(holes, N_BIFILARS, 0.0 if locked else pin_damping(p, holes))
-    if stiffness_factor != 1.0:
-        absorber = replace(absorber, order=absorber.order * np.sqrt(stiffness_factor))
     k0 = k + 1j * whirl * c - whirl**2 * (p["shaft_mass"] + p["rotor_mass"]
                                           + absorber.total_mass)
     if locked:
@@ -258,48 +249,12 @@ def linear_response(p: dict[str, Any], holes, stiffness_factor: float = 1.0
     return whirl, force * den / delta, force * num / delta
 
 
-def describing_response(p: dict[str, Any], holes) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """:func:`linear_response` with the amplitude detuning of circular holes.
-
-    With circular holes the swing is a pendulum in the centrifugal field: its restoring torque
-    is −K sin φ, not −K φ. Its describing function, the first harmonic of −K sin(A cos θ)
-    over A cos θ, is K·2J₁(A)/A (J₁ the Bessel function): a softer swing at amplitude A
-    (the free swing's frequency √(2J₁(A)/A) ñΩ is the exact pendulum's to 1e-4 at 30°:
-    1.7 % below ñΩ). The response is solved with that stiffness at its own swing amplitude
-    (the largest tone's), by a relaxed fixed-point iteration. At 2.864P with 0.75 times the
-    fuselage stiffness the periodic swing is 16.4°, the linear response 13.3°, this one 15.1°.
-    Other hole shapes (designed against detuning) and locked bifilars: the linear response;
-    also where the iteration does not settle (a jump between coexisting responses).
-
-    Not the default start (``initial_state = "describing"``). Below 3P it is the better one
-    (the two largest swings of issue 14's sweep: 7.25 revolutions against 8.75 and 9.25; the
-    free case 5.25 against 5.5; the sweep's mean 6.25 against 6.6), but above 3P it starts
-    further from the periodic response than the linear start (3.3P with 1.5 times the
-    stiffness: first change 6.9e-2 against 2.9e-2, a second restart, 9.0 revolutions against
-    7.75): the stiffness alone is corrected, not the forcing, whose direction τ turns with φ.
-    The nonlinear start (:func:`nonlinear_start`, the default) has both, exactly."""
-    base = linear_response(p, holes)
-    if p["bifilar"] == "locked" or holes.shape != "circle":
-        return base
-    amp = float(np.abs(base[2]).max())
-    for _ in range(DESCRIBING_ITERATIONS):
-        if not (np.isfinite(amp) and 0.0 < amp < LINEAR_START_LIMIT):
-            return base
-        out = linear_response(p, holes, 2.0 * j1(amp) / amp)
-        new = float(np.abs(out[2]).max())
-        if abs(new - amp) <= 1e-10:
-            return out
-        amp = 0.5 * (amp + new)  # relaxed: the plain iteration can cycle near resonance
-    return base
-
-
-def linear_start(p: dict[str, Any], holes, response=linear_response) -> AbsorberStart:
-    """The state at t = 0 of :func:`linear_response` (or of another ``response`` of the same
-    form, :func:`describing_response`): the hub centre's position and velocity, each bifilar's
-    pin angle φ_k = Re(A e^{−iψ_k}) and rate Re((Ȧ − iΩA) e^{−iψ_k}). What the linearization
-    leaves out (amplitude detuning, the hole shape beyond its vertex curvature) is the
-    transient the shooting removes."""
-    whirl, zz, aa = response(p, holes)
+def linear_start(p: dict[str, Any], holes) -> AbsorberStart:
+    """The state at t = 0 of :func:`linear_response`: the hub centre's position and
+    velocity, each bifilar's pin angle φ_k = Re(A e^{−iψ_k}) and rate
+    Re((Ȧ − iΩA) e^{−iψ_k}). What the linearization leaves out (amplitude detuning, the hole
+    shape beyond its vertex curvature) is the transient the shooting removes."""
+    whirl, zz, aa = linear_response(p, holes)
     z0, zd0 = zz.sum(), (1j * whirl * zz).sum()
     a0, ad0 = aa.sum(), (1j * whirl * aa).sum()
     rot = np.exp(-1j * AZIMUTHS)  # e^{−iψ_k} at t = 0
@@ -399,11 +354,9 @@ def initial_start(p: dict[str, Any], holes) -> tuple[AbsorberStart, str]:
 
 
 def _linear_start_checked(p: dict[str, Any], holes) -> tuple[AbsorberStart, str]:
-    """The linear (or describing-function) start where the linearization holds, else rest and
-    why."""
-    response = describing_response if p["initial_state"] == "describing" else linear_response
+    """The linear start where the linearization holds, else rest and why."""
     with np.errstate(all="ignore"):  # a non-finite response is reported, not warned about
-        start = linear_start(p, holes, response)
+        start = linear_start(p, holes)
     values = np.concatenate([start.angles, start.rates, start.center, start.velocity])
     if not np.all(np.isfinite(values)):
         return AbsorberStart(), ("started at rest: the linear response is not finite (an "

@@ -248,40 +248,6 @@ def test_nonlinear_and_linear_starts_are_nearly_periodic():
             run({**given, "initial_state": start, "periodic_tolerance": fails})
 
 
-def test_describing_function_start_has_the_circular_holes_amplitude_detuning():
-    """``initial_state = "describing"``: the swing's stiffness at its describing-function
-    value K·2J₁(A)/A. The free swing's frequency it gives, √(2J₁(A)/A) ñΩ, is the exact
-    pendulum's (complete elliptic integral) to 2.5e-5 at 30° (3e-5 asserted; 1.7 % of
-    detuning there). On the hub tuned to 2.864P with 0.75 times the fuselage stiffness, the
-    periodic 3P swing is 16.4°: the linear response gives 13.3°, the describing one 15.1°
-    (asserted: at most half the linear one's error). Non-circular holes and locked bifilars
-    keep the linear response."""
-    from scipy.special import ellipk, j1
-
-    from studies import hub
-    from studies.periodic import referred_harmonics
-
-    amp = np.radians(np.arange(1.0, 31.0))
-    exact = np.pi / (2 * ellipk(np.sin(amp / 2) ** 2))
-    assert np.abs(np.sqrt(2 * j1(amp) / amp) / exact - 1).max() < 3e-5
-    given = {"tuning_order": 2.864, "fuselage_stiffness_scale": 0.75}
-    p = SPEC.complete(given)
-    holes = hub.holes_for(p)
-    lin, dsc = (np.degrees(np.abs(f(p, holes)[2][0]))
-                for f in (hub.linear_response, hub.describing_response))
-    ds = hub.run({**given, "error_estimate": False, "richardson": False})
-    rows = _samples(ds)[-40:]
-    c = referred_harmonics(rows[:, [0, *range(7, rows.shape[1])]], p["hub_speed"], 3)
-    periodic = 2 * np.abs(c[3]).max()  # the 3P swing (degree)
-    assert 16.0 < periodic < 17.0 and lin < dsc < periodic
-    assert periodic - dsc <= 0.5 * (periodic - lin), (lin, dsc, periodic)
-    for other in ({"hole": "cycloid"}, {"bifilar": "locked"}):
-        q = SPEC.complete({**given, **other})
-        h = hub.holes_for(q)
-        for a, b in zip(hub.linear_response(q, h), hub.describing_response(q, h), strict=True):
-            np.testing.assert_array_equal(a, b)
-
-
 def _samples(ds) -> np.ndarray:
     """The run's recorded rows as the sampler gives them: time, hub x, y and force x, y (fixed
     frame), tuning-mass centre x, y, pin angles."""
