@@ -38,7 +38,7 @@ periodic response has bifilar k + 1 doing what bifilar k does a sector later:
 them, the hub's harmonics (multiples of N) follow in closed form from the reaction's, and the
 swing equation's residual, evaluated on M samples per revolution and projected on harmonics
 0…H, is solved for zero (Newton's method, from the linear response, by continuation in the
-forcing amplitude if the direct solve fails; 0.06 s). Measured at that 16.6° swing: H = 12 and
+forcing amplitude if the direct solve fails; 0.034 s). Measured at that 16.6° swing: H = 12 and
 H = 24 agree to 1.3e-9 rad, and the multibody hub's periodic response to 1.5e-4 of each
 signal's largest harmonic (``tests/test_reduced_hub.py``).
 """
