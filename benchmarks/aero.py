@@ -22,7 +22,7 @@ import numpy as np
 
 from solver.simulation import simulate
 from solver.system import System
-from tests.test_lifting_line import OMEGA, hover_closed_form, rotor
+from tests.solver.lifting_line_models import OMEGA, hover_closed_form, rotor
 
 
 def main() -> None:

@@ -28,8 +28,7 @@ from solver.curve_joints import CurveSliding, CurveSlidingSet
 from solver.curves import NurbsCurve, circle
 from solver.model import Model
 from solver.system import System
-from tests.models import rodrigues
-from tests.test_curve_joint import _dense, _fd4
+from tests.solver.models import dense, fd4, rodrigues
 
 SEED = 20250611
 # two sliders per curve; η away from the circle's double knots at 0.25, 0.5, 0.75 (p'' jumps)
@@ -100,7 +99,7 @@ def _values(cs, q):
 
 
 def _jacobian(cs, q, n):
-    return _dense(cs.constraint(q, 0.0)[1], cs.hol_rows, cs.hol_cols, (cs.n_holonomic, n))
+    return dense(cs.constraint(q, 0.0)[1], cs.hol_rows, cs.hol_cols, (cs.n_holonomic, n))
 
 
 # ---------------------------------------------------------------------------- values
@@ -137,7 +136,7 @@ def test_jacobian_matches_finite_differences(case):
     s, cs = case
     q = _random_q(s, cs, np.random.default_rng(SEED + 1))
     g = _jacobian(cs, q, s.n)
-    fd = np.column_stack([_fd4(lambda x: _values(cs, x), q, i, 1e-4) for i in range(s.n)])
+    fd = np.column_stack([fd4(lambda x: _values(cs, x), q, i, 1e-4) for i in range(s.n)])
     # measured max |G − FD| ≤ 3.4e-12 over the cases, 3.5e-13 of max |FD| (FD truncation
     # (1e-4)⁴·|C⁽⁵⁾| and roundoff eps/h ≈ 1e-12); a wrong entry would be off by O(1e-2) or more
     assert np.abs(g - fd).max() < 1e-9 * max(1.0, np.abs(fd).max())
@@ -154,7 +153,7 @@ def test_discrete_jacobian_is_exact(case, deta):
     dq = 0.05 if deta > 1e-3 else 1e-6
     qf = qi + dq * rng.standard_normal(s.n)
     qf[cs.ie] = qi[cs.ie] + deta
-    gbar = _dense(cs.discrete_jacobian(qi, qf), cs.hol_rows, cs.hol_cols,
+    gbar = dense(cs.discrete_jacobian(qi, qf), cs.hol_rows, cs.hol_cols,
                   (cs.n_holonomic, s.n))
     dc = _values(cs, qf) - _values(cs, qi)
     # measured ≤ 4.4e-16 absolute (|C| up to 0.2, |ΔC| up to 0.7): roundoff of C itself
@@ -172,12 +171,12 @@ def test_hessian_matches_finite_differences(case):
     rng = np.random.default_rng(SEED + 3)
     q = _random_q(s, cs, rng)
     lam = rng.standard_normal(cs.n_holonomic)
-    h = _dense(cs.constraint_hessian(q, 0.0, lam), cs.hess_rows, cs.hess_cols, (s.n, s.n))
+    h = dense(cs.constraint_hessian(q, 0.0, lam), cs.hess_rows, cs.hess_cols, (s.n, s.n))
 
     def glam(x):
         return _jacobian(cs, x, s.n).T @ lam
 
-    fd = np.column_stack([_fd4(glam, q, i, 1e-4) for i in range(s.n)])
+    fd = np.column_stack([fd4(glam, q, i, 1e-4) for i in range(s.n)])
     scale = np.abs(fd).max()  # 16 to 53 over the cases
     ee = np.zeros((s.n, s.n), dtype=bool)
     ee[cs.ie, cs.ie] = True
@@ -224,7 +223,7 @@ def test_arc_length_rows_match_finite_differences(kind):
     dq = rng.standard_normal(n)
     a = _kernels.arc_length_matrix(*curve.spline, q, ie)
     h = 3e-4
-    sp = np.linalg.norm(_fd4(curve.point, q[ie], slice(None), h), axis=1)
+    sp = np.linalg.norm(fd4(curve.point, q[ie], slice(None), h), axis=1)
     assert np.all(a[:, 0] == 1.0)
     # measured ≤ 4.1e-12 of |p'| ≈ 4.7 (FD truncation h⁴|p⁽⁵⁾|: 4.8e-10 with h = 1e-3)
     assert np.abs(a[:, 1] + sp).max() < 1e-10 * sp.max()
@@ -233,7 +232,7 @@ def test_arc_length_rows_match_finite_differences(kind):
     def adq(x):
         return _kernels.arc_length_matrix(*curve.spline, x, ie)[:, 1] * dq[ie]
 
-    fd = np.array([_fd4(adq, q, i, h)[j] for j, i in enumerate(ie)])
+    fd = np.array([fd4(adq, q, i, h)[j] for j, i in enumerate(ie)])
     assert np.all(d[:, 0] == 0.0)
     # measured ≤ 9.2e-11 of the largest |FD| (2.2 to 2.6; FD truncation, the space curve's
     # the larger); a wrong sign or factor would be off by O(1)

@@ -15,7 +15,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from solver.simulation import simulate
-from tests.models import AddedMass, rod_pendulum
+from tests.solver.models import AddedMass, rod_pendulum
 
 M, L, G, MA = 1.0, 1.0, 9.81, 0.7
 J_CM = M * L * L / 12.0

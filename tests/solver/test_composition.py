@@ -10,7 +10,7 @@ import pytest
 from solver.composition import COMPOSITIONS, Composed
 from solver.integrators import StepInfo, make_integrator
 from solver.system import System
-from tests.test_solver_core import _feedback_oscillator, oscillator, pendulum, pendulum_period
+from tests.solver.models import feedback_oscillator, oscillator, pendulum, pendulum_period
 
 
 def _composed(model, h: float, method: str | None, tol: float = 1e-13):
@@ -92,7 +92,7 @@ def test_nonsymmetric_schemes_and_unknown_methods_refused():
 def test_delayed_feedback_refused():
     """A delay line records the converged steps in time order; a backward substep would
     corrupt it, so a model with delayed feedback cannot be composed."""
-    model, _ = _feedback_oscillator(1.0, feedback=True)
+    model, _ = feedback_oscillator(1.0, feedback=True)
     with pytest.raises(ValueError, match="delayed feedback"):
         Composed(make_integrator(System(model), "ep", 0.01), "suzuki")
 

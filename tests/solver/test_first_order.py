@@ -20,7 +20,7 @@ from scipy.integrate import solve_ivp
 from solver.bodies import RigidBody
 from solver.model import Model
 from solver.simulation import simulate
-from tests.models import Lag, rod_pendulum
+from tests.solver.models import Lag, rod_pendulum
 
 M, L, G = 1.0, 1.0, 9.81
 J_CM = M * L * L / 12.0  # slender rod about its centre

@@ -25,6 +25,20 @@ from solver.model import Model
 from solver.simulation import simulate
 from solver.system import System
 from solver.timefunctions import linear
+from tests.solver.models import (
+    TOP_G,
+    TOP_J,
+    TOP_M,
+    TOP_W,
+    TOP_X,
+    feedback_oscillator,
+    fitted_roots,
+    heavy_top,
+    oscillator,
+    pendulum,
+    pendulum_period,
+    zero_crossings,
+)
 
 G = 9.81
 
@@ -49,12 +63,6 @@ def _vee_angle(s, n):
     return np.arctan2(sin, cos)
 
 
-def _zero_crossings(t, y, t_min=0.0):
-    """Zeros of the C² cubic spline through (t, y) (interpolation error O(h⁴))."""
-    r = CubicSpline(t, y).roots(extrapolate=False)
-    return r[r > t_min]
-
-
 def _half_period_estimate(roots):
     """Least-squares slope of crossing times against their index: half the period."""
     k = np.arange(len(roots))
@@ -62,24 +70,6 @@ def _half_period_estimate(roots):
 
 
 # ---------------------------------------------------------------------------- pendulum
-def pendulum(theta0, m=1.0, length=1.0):
-    """Slender rod (m, L) on a revolute about z at its end, released from rest at θ0 from −y."""
-    g0 = ground()
-    c = np.array([np.sin(theta0), -np.cos(theta0), 0.0]) * length / 2
-    rod = RigidBody("rod", m, inertia=(m * length**2 / 12, 0.0, m * length**2 / 12),
-                    position=c, orientation=_rot((0, 0, 1), theta0))
-    mod = Model()
-    mod.add(g0, rod, Revolute("pin", g0, rod, point=(0, 0, 0), axis=(0, 0, 1)),
-            Gravity((0, -G, 0)))
-    return mod
-
-
-def pendulum_period(theta0, m=1.0, length=1.0):
-    """T = 4 K(k) / ω0 with k = sin(θ0/2), ω0² = m g L/2 / (m L²/3) (K of parameter k²)."""
-    w0 = np.sqrt(m * G * length / 2 / (m * length**2 / 3))
-    return 4.0 * ellipk(np.sin(theta0 / 2) ** 2) / w0
-
-
 def measured_pendulum_period(theta0, steps_per_period, scheme, record_every=1):
     """Period from the zeros of the rod's angular velocity (turning points, every T/2) over
     two full periods (t ∈ [T/2, 5T/2])."""
@@ -88,7 +78,7 @@ def measured_pendulum_period(theta0, steps_per_period, scheme, record_every=1):
                    reactions=False, record_every=record_every)
     assert sim.converged, sim.message
     ds = sim.dataset
-    roots = _zero_crossings(ds.time.values, ds.angular_velocity.values[:, 0, 2], 0.25 * t_ref)
+    roots = zero_crossings(ds.time.values, ds.angular_velocity.values[:, 0, 2], 0.25 * t_ref)
     assert len(roots) == 5, roots
     return 2.0 * _half_period_estimate(roots), t_ref, sim
 
@@ -124,22 +114,6 @@ def test_pendulum_period_convergence_order(scheme):
 
 
 # ---------------------------------------------------------------------------- heavy top
-TOP_M = 15.0
-TOP_J = np.diag([0.234375, 0.46875, 0.234375])
-TOP_X = np.array([0.0, 1.0, 0.0])
-TOP_W = np.array([0.0, 150.0, -4.61538])
-TOP_G = np.array([0.0, 0.0, -9.81])
-
-
-def heavy_top():
-    """Brüls, Cardona & Arnold (2012): body frame = global frame at t = 0, so the body angular
-    velocity equals the global one; centre-of-mass velocity ω × x."""
-    g0 = ground()
-    top = RigidBody("top", TOP_M, inertia=np.diag(TOP_J), position=TOP_X,
-                    velocity=np.cross(TOP_W, TOP_X), angular_velocity=TOP_W)
-    mod = Model()
-    mod.add(g0, top, Spherical("tip", g0, top, point=(0, 0, 0)), Gravity(TOP_G))
-    return mod, top
 
 
 def _quat_matrix(q):
@@ -319,14 +293,6 @@ def test_torque_free_reported_angular_velocity_is_second_order():
 
 
 # ---------------------------------------------------------------------------- linear oscillator
-def oscillator(m=1.0, k=1.0, c=0.0, v0=1.0):
-    """Point mass on a spring (and damper) to ground at its initial position, no gravity."""
-    p = PointMass("m", m, velocity=(v0, 0.0, 0.0))
-    mod = Model()
-    mod.add(p, Spring("s", None, p, point=(0, 0, 0), stiffness=k, damping=c))
-    return mod
-
-
 def generalized_alpha_roots(wh, rho_inf):
     """Eigenvalues of the amplification matrix of Chung–Hulbert's generalized-α for
     ẍ + ω² x = 0 (state x, v, a; written out from the scheme's definition)."""
@@ -337,19 +303,6 @@ def generalized_alpha_roots(wh, rho_inf):
     lhs = np.array([[1, 0, -b], [0, 1, -g], [(1 - af) * w2, 0, 1 - am]])
     rhs = np.array([[1, 1, 0.5 - b], [0, 1, 1 - g], [-af * w2, 0, -am]])
     return np.linalg.eigvals(np.linalg.solve(lhs, rhs))
-
-
-def fitted_roots(seqs, order):
-    """Roots of the linear recurrence x_{n+p} = Σ c_k x_{n+p-k} fitted (least squares) to the
-    position and velocity sequences: the eigenvalues of the one-step amplification matrix
-    (Cayley–Hamilton), measured from the simulated free response only."""
-    rows, rhs = [], []
-    for s in seqs:
-        for n in range(len(s) - order):
-            rows.append(s[n : n + order][::-1])
-            rhs.append(s[n + order])
-    coef = np.linalg.lstsq(np.array(rows), np.array(rhs), rcond=None)[0]
-    return np.roots(np.concatenate([[1.0], -coef]))
 
 
 def _oscillator_response(scheme, wh, rho_inf=None, steps=None):
@@ -601,7 +554,7 @@ def test_damped_oscillator_log_decrement():
     assert sim.converged, sim.message
     ds = sim.dataset
     t, x, v = ds.time.values, ds.position.values[:, 0, 0], ds.velocity.values[:, 0, 0]
-    peaks = CubicSpline(t, x)(_zero_crossings(t, v))
+    peaks = CubicSpline(t, x)(zero_crossings(t, v))
     maxima = peaks[peaks > 0]
     assert len(maxima) >= 4
     delta = np.mean(np.log(maxima[:-1] / maxima[1:]))
@@ -697,7 +650,7 @@ def test_rotational_spring_frequency(free):
     ds = sim.dataset
     w = ds.angular_velocity.values @ n  # (time, body)
     rate = w[:, -1] - (w[:, 0] if free else 0.0)  # relative rate φ̇ (disc is the last body)
-    roots = _zero_crossings(ds.time.values, rate, 0.25 * t_ref)
+    roots = zero_crossings(ds.time.values, rate, 0.25 * t_ref)
     assert len(roots) == 5
     period = 2 * _half_period_estimate(roots)
     assert abs(period / t_ref - 1) <= 1e-4
@@ -721,7 +674,7 @@ def test_rotational_spring_beyond_half_a_turn():
     phi = sim.dataset.joint_angle.values[:, 0]
     # before the spring unwrapped φ, it ran away to 46 rad
     assert abs(phi.max() - w0 / omega) <= 1e-3
-    roots = _zero_crossings(sim.dataset.time.values,
+    roots = zero_crossings(sim.dataset.time.values,
                             sim.dataset.angular_velocity.values[:, 0, 2], 0.25 * t_ref)
     assert len(roots) == 5
     # measured 1.46e-4 at T/400: the midpoint phase error plus the O(h²) error of angular
@@ -764,7 +717,7 @@ def test_centrifugal_pendulum_period(amplitude_deg):
     sim, t_ref, spin = _centrifugal_run(np.radians(amplitude_deg), 400, "ep")
     ds = sim.dataset
     rate = ds.angular_velocity.sel(body="rod").values[:, 2] - spin  # θ̇
-    roots = _zero_crossings(ds.time.values, rate, 0.25 * t_ref)
+    roots = zero_crossings(ds.time.values, rate, 0.25 * t_ref)
     assert len(roots) == 5
     assert abs(2 * _half_period_estimate(roots) / t_ref - 1) <= 1.5e-4
     # energy changes only by the work of the hub's drive: measured ≤ 3e-11 J on E ≈ 5 J
@@ -939,29 +892,6 @@ def test_rotational_damper_jacobians_match_finite_differences(grounded):
 
 
 # ------------------------------------------------------------------ delayed feedback damping
-def _feedback_oscillator(moment: float, feedback: bool, spin: float = 0.0):
-    """Disc on a revolute, J φ̈ + c φ̇ + k φ = M cos Ωt (τ = 2π/Ω = 1 s), ω0 = 0.27 Ω and 1 %
-    damping (a rotor's lag mode), with the delayed feedback tuned for damping ratio 0.5 at ω0
-    (a = bω0 sin ω0τ / (1 − cos ω0τ), b = ζ J ω0: no stiffness change at ω0)."""
-    jz, tau = 1.0, 1.0
-    w0 = 0.27 * 2 * np.pi / tau
-    k, c = jz * w0**2, 2 * 0.01 * jz * w0
-    b = 0.5 * jz * w0 if feedback else 0.0
-    th = w0 * tau
-    a = b * w0 * np.sin(th) / (1 - np.cos(th))
-    n = np.array([0.0, 0.0, 1.0])
-    g0 = ground()
-    disc = RigidBody("disc", 1.0, inertia=(0.5, 0.5, jz), angular_velocity=spin * n)
-    mod = Model()
-    mod.add(g0, disc, Revolute("pin", g0, disc, point=(0, 0, 0), axis=n),
-            RelativeRotation("lag", None, disc, axis=n, stiffness=k, damping=c,
-                             delay=tau, delayed_stiffness=a, delayed_damping=b))
-    if moment:
-        mod.add(AppliedLoad("m", disc, moment=lambda t: (0.0, 0.0,
-                                                         moment * np.cos(2 * np.pi * t / tau))))
-    return mod, (jz, c, k, a, b, tau)
-
-
 def _per_period_peaks(sim, steps):
     phi = sim.dataset.joint_angle.values[:, 0]
     return np.abs(phi[: len(phi) // steps * steps].reshape(-1, steps)).max(axis=1)
@@ -975,7 +905,7 @@ def test_delayed_feedback_damps_the_transient_at_the_characteristic_root():
     without feedback. The root is fitted to the simulated φ(t) over t = 6 … 12 τ (linear
     prediction of order 2 on samples 0.1 τ apart, where the next roots, −1.42 ± 4.10i and
     beyond, have decayed below 3 % of it)."""
-    mod, (jz, c, k, a, b, tau) = _feedback_oscillator(0.0, True, spin=0.1)
+    mod, (jz, c, k, a, b, tau) = feedback_oscillator(0.0, True, spin=0.1)
     steps = 240
     sim = simulate(mod, 12 * tau, tau / steps, scheme="galpha", rho_inf=0.5, reactions=False,
                    tol=1e-12)
@@ -1014,7 +944,7 @@ def test_delayed_feedback_leaves_the_periodic_response_exact():
     steps = 240
     errors = {}
     for fb in (True, False):
-        mod, (jz, c, k, _a, _b, tau) = _feedback_oscillator(1.0, fb)
+        mod, (jz, c, k, _a, _b, tau) = feedback_oscillator(1.0, fb)
         sim = simulate(mod, 11 * tau, tau / steps, scheme="galpha", rho_inf=0.5,
                        reactions=False, tol=1e-12)
         assert sim.converged, sim.message

@@ -48,11 +48,11 @@ from pipelines.sweep import (
 from studies import bifilar, collar, hub
 from studies.parameters import Param, ParameterError
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 if str(REPO) not in sys.path:
     sys.path.insert(0, str(REPO))
-models = importlib.import_module("tests.pipeline_models")
-MODEL = "tests.pipeline_models:SPEC"
+models = importlib.import_module("tests.pipelines.models")
+MODEL = "tests.pipelines.models:SPEC"
 CF_TABLES = Path(__file__).parent / "data" / "cf"
 
 SPECS = {"hub": hub.SPEC, "pendulum": bifilar.SPEC, "collar": collar.SPEC}

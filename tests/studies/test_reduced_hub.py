@@ -69,13 +69,13 @@ def test_multibody_hub_has_the_reduced_models_periodic_response_at_large_swing(h
     by 19 % (the 3P swing 13.3° instead of 16.4°): the amplitude detuning and the turning
     forcing direction are right in both. The same for cycloidal and epicycloidal holes (slow
     tier), whose path speed |Γ'| varies along the swing: measured 1.6e-5 and 1.5e-5."""
-    from tests.test_hub import _samples
+    from tests.studies.helpers import hub_samples
 
     given = {**LARGE_SWING, "hole": hole}
     p, holes, sol, (_, _, aa) = _solve(given)
     ds = hub.run({**given, "steps_per_rev": 80, "periodic_tolerance": 1e-4})
     assert ds.attrs["message"] == "" and ds.attrs["richardson"] == 1
-    multibody = _samples(ds)[-80:]
+    multibody = hub_samples(ds)[-80:]
     reduced = hub.reduced_samples(p, holes, multibody[:, 0])
     a, b = (referred_harmonics(rows, p["hub_speed"], 8) for rows in (multibody, reduced))
     scale = np.abs(b).max(axis=0)

@@ -26,7 +26,7 @@ from solver.bodies import RigidBody, ground
 from solver.forces import RelativeRotation, RelativeRotationSet
 from solver.model import Model
 from solver.system import System
-from tests.models import rodrigues
+from tests.solver.models import rodrigues
 
 SEED = 20250612
 AXES = {"body": (0.0, 0.0, 1.0), "skew": (0.2, 0.3, 1.0), "x": (1.0, 0.0, 0.0)}

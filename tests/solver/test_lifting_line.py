@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from scipy.optimize import brentq
 
 from solver.air import FlightCondition
 from solver.airfoil import (
@@ -32,19 +31,25 @@ from solver.airfoil import (
     theodorsen,
     wagner,
 )
-from solver.beams import straight_beam
 from solver.bodies import PrescribedBody, RigidBody, ground
 from solver.forces import RelativeRotation
-from solver.inflow import DynamicInflow
 from solver.joints import Revolute
 from solver.lifting_line import LiftingLine
 from solver.model import Model
 from solver.rotations import rotation_about
-from solver.sections import isotropic_section
 from solver.simulation import simulate
 from solver.system import System
+from tests.solver.lifting_line_models import (
+    OMEGA,
+    R_ROTOR,
+    RHO,
+    beam_line,
+    hover_closed_form,
+    rotor,
+    wing_beam,
+)
 
-B, U, RHO, A_EA = 0.25, 50.0, 1.225, -0.2  # semichord (m), speed (m/s), kg/m³, elastic axis
+B, U, A_EA = 0.25, 50.0, -0.2  # semichord (m), speed (m/s), elastic axis
 # wing frame at zero pitch: d1 span (+y), d2 towards the leading edge (−x: the air blows +x),
 # d3 up
 WING = np.column_stack([[0.0, 1.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
@@ -176,40 +181,6 @@ def test_indicial_response_is_wagner():
 
 
 # ------------------------------------------------------------------ hover
-R_ROTOR, OMEGA, CHORD, NB, X0, SLOPE = 5.0, 30.0, 0.3, 4, 0.2, 5.7
-
-
-def rotor(theta, inflow_model="pitt-peters", n=4, flight=None, **kw):
-    """NB rigid blades (prescribed spin about z, pitch θ) with lifting lines and an inflow."""
-    flight = flight or FlightCondition(0.0, 0.0, RHO)
-    inflow = DynamicInflow("inflow", flight, R_ROTOR, OMEGA, model=inflow_model,
-                           initial_thrust=0.005, **kw)
-    model = Model()
-    model.add(inflow)
-    lines = []
-    for k in range(NB):
-        psi0 = 2 * np.pi * k / NB
-
-        def motion(t, psi0=psi0):
-            r = rotation_about((0, 0, 1), psi0 + OMEGA * t) @ rotation_about((1, 0, 0), theta)
-            return np.zeros(3), r, np.zeros(3), np.array([0, 0, OMEGA]), np.zeros(3), np.zeros(3)
-
-        blade = PrescribedBody(f"blade{k}", motion)
-        lines.append(LiftingLine(f"line{k}", blade, flight, chord=CHORD, span=(X0 * R_ROTOR,
-                                 R_ROTOR), lift_slope=SLOPE, wake_states=n, inflow=inflow))
-        model.add(blade, lines[-1])
-    return model, inflow, lines
-
-
-def hover_closed_form(theta):
-    sigma = NB * CHORD / (np.pi * R_ROTOR)
-
-    def ct(lam):
-        return sigma * SLOPE / 2 * ((1 - X0**3) * np.sin(theta) / 3
-                                    - lam * (1 - X0**2) * np.cos(theta) / 2)
-
-    lam = brentq(lambda x: 2 * x * x - ct(x), 1e-9, 0.5)
-    return lam, ct(lam)
 
 
 def run_rotor(model, inflow, lines, t_end, steps_per_rev):
@@ -253,20 +224,13 @@ def test_hover_inflow_is_momentum_theory_and_thrust_is_blade_element(collective_
 
 
 # ------------------------------------------------------------------ beam, energy, Jacobians
-def _beam(n_el=2, length=2.0):
-    sec = isotropic_section(EA=1e7, GA2=1e6, GA3=1e6, GJ=5e3, EI2=2e4, EI3=8e4, mass=2.0,
-                            i22=1e-3, i33=4e-3)
-    return straight_beam("wing", (0, 0, 0), (0, length, 0), sec, n_elements=n_el,
-                         e3=(0, 0, 1))
-
-
 def test_beam_line_gives_consistent_lift_and_root_moment():
     """A straight beam along +y (d2 = −x: the leading edge faces the wind U x̂) pitched by α:
     with w34 = U sin α, u = U cos α and Γ = a b w34, the force ρ Γ (u e_n + w34 e_c) has the
     vertical component ρ a b U² sin α per length exactly; the consistent nodal loads must sum
     to it and give the root moment lift · L/2 about x."""
     alpha, length, slope = 0.05, 2.0, 6.0
-    beam = _beam(length=length)
+    beam = wing_beam(length=length)
     assert np.allclose(beam.frames[0][:, 1], (-1, 0, 0))
     line = LiftingLine("aero", beam, FlightCondition(U, 0.0, RHO), chord=2 * B, pitch=alpha,
                        lift_slope=slope, wake_states=4)
@@ -304,21 +268,6 @@ def test_ep_books_the_air_work_exactly():
     assert sim.converged, sim.message
     rec = np.array(rec)
     assert np.ptp(rec) < 1e-10 * 200.0 * 0.05**2, np.ptp(rec)
-
-
-def beam_line(zero_lift_angle: float = 0.0) -> tuple[Model, LiftingLine]:
-    """A twisted two-element beam line in forward flight with a Peters–He inflow."""
-    flight = FlightCondition(40.0, 0.05, RHO)
-    beam = _beam(n_el=2, length=4.0)
-    inflow = DynamicInflow("inflow", flight, 4.0, 20.0, model="peters-he", harmonics=2,
-                           power=3, initial_thrust=0.004)
-    line = LiftingLine("aero", beam, flight, chord=0.3, pitch=lambda s: 0.1 - 0.02 * s,
-                       quarter_chord=0.02, drag=0.01, lift_slope=5.7, wake_states=4,
-                       inflow=inflow, span=(0.5, 4.0), lift_end=3.8, points=3,
-                       zero_lift_angle=zero_lift_angle)
-    model = Model()
-    model.add(beam, inflow, line)
-    return model, line
 
 
 def _dense(n: int, vals, rows, cols):

@@ -26,7 +26,7 @@ from solver.model import Model
 from solver.modes import linearize, modes, natural_frequencies
 from solver.state import StateBlock
 from solver.system import System
-from tests.models import G, Lag, rodrigues, rolling_disc
+from tests.solver.models import G, Lag, rodrigues, rolling_disc
 
 TWO_PI = 2.0 * np.pi
 

@@ -20,8 +20,8 @@ import xarray as xr
 
 from pipelines.archive import STATUS_OK
 
-REPO = Path(__file__).resolve().parents[1]
-MODEL = "tests.pipeline_models:SPEC"
+REPO = Path(__file__).resolve().parents[2]
+MODEL = "tests.pipelines.models:SPEC"
 START_TIMEOUT = 60.0
 RUN_TIMEOUT = 180.0
 

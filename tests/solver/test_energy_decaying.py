@@ -17,7 +17,6 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
-from test_solver_core import G, _rot, _zero_crossings, fitted_roots, heavy_top, oscillator
 
 from solver.bodies import PointMass, RigidBody, ground, spinning
 from solver.forces import AppliedLoad, Gravity, RelativeRotation, Spring
@@ -27,6 +26,7 @@ from solver.model import Model
 from solver.simulation import simulate
 from solver.system import System
 from studies import bifilar, collar
+from tests.solver.models import G, fitted_roots, heavy_top, oscillator, rodrigues, zero_crossings
 
 
 def pade12(z: complex) -> complex:
@@ -100,7 +100,7 @@ def elastic_pivot_pendulum(theta0: float, k: float, m: float = 1.0, length: floa
     c = np.array([np.sin(theta0), -np.cos(theta0), 0.0]) * length / 2
     j = m * length**2 / 12
     rod = RigidBody("rod", m, inertia=(j, 1e-2 * j, j), position=c,
-                    orientation=_rot((0, 0, 1), theta0))
+                    orientation=rodrigues((0, 0, 1), theta0))
     mod = Model()
     mod.add(rod, Spring("pivot", None, rod, point=(0, 0, 0), stiffness=k), Gravity((0, -G, 0)))
     return mod
@@ -113,7 +113,7 @@ def torsion_pendulum(theta0: float, k: float = 20.0, m: float = 1.0, r: float = 
     g0 = ground()
     c = np.array([np.sin(theta0), -np.cos(theta0), 0.0]) * r
     disc = RigidBody("disc", m, inertia=(0.25 * m * r * r, 0.25 * m * r * r, 0.5 * m * r * r),
-                     position=c, orientation=_rot((0, 0, 1), theta0))
+                     position=c, orientation=rodrigues((0, 0, 1), theta0))
     mod = Model()
     mod.add(g0, disc, Revolute("pin", g0, disc, point=(0, 0, 0), axis=(0, 0, 1)),
             RelativeRotation("spring", None, disc, axis=(0, 0, 1), stiffness=k, phi0=-theta0),
@@ -157,7 +157,7 @@ def driven_damped_loaded():
     rod's lower end."""
     hub = spinning("hub", 3.0)
     th = np.radians(60.0)
-    rot = _rot((0, 0, 1), th)
+    rot = rodrigues((0, 0, 1), th)
     c = rot @ np.array([0.0, -0.5, 0.0])
     rod = RigidBody("rod", 1.0, inertia=(1 / 12, 1e-3 / 12, 1 / 12), position=c,
                     orientation=rot)
@@ -213,7 +213,7 @@ def test_slow_mode_energy_loss_and_period_orders():
         assert sim.converged, sim.message
         ds = sim.dataset
         t, e = ds.time.values, ds.energy.values
-        roots = _zero_crossings(t, ds.angular_velocity.values[:, 0, 2], 0.25 * period)
+        roots = zero_crossings(t, ds.angular_velocity.values[:, 0, 2], 0.25 * period)
         perr.append(abs((roots[2] - roots[0]) / period - 1))
         loss.append((e[0] - e[n]) / abs(e[0]))
     order_loss = np.log2(np.array(loss[:-1]) / loss[1:])

@@ -7,6 +7,13 @@
 * :func:`rod_pendulum` — a slender rod hinged at one end, with an extra element attached.
 * :func:`rodrigues` — a rotation matrix independent of :mod:`solver.rotations`.
 * :func:`rolling_disc` — a disc rolling without slip inside a circular track.
+* :func:`pendulum`, :func:`pendulum_period` — a slender rod pendulum and its exact period.
+* :func:`oscillator` — a point mass on a spring and damper.
+* :func:`feedback_oscillator` — a disc on a revolute with delayed feedback damping.
+* :func:`heavy_top` — the heavy top of Brüls, Cardona & Arnold (2012).
+* :func:`zero_crossings`, :func:`fitted_roots` — zeros of a spline through samples, roots of
+  the one-step recurrence fitted to a free response.
+* :func:`fd4`, :func:`dense` — fourth-order central differences, triplets to a dense matrix.
 """
 
 from __future__ import annotations
@@ -14,13 +21,15 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.interpolate import CubicSpline
+from scipy.special import ellipk
 
-from solver.bodies import RigidBody, ground
+from solver.bodies import PointMass, RigidBody, ground
 from solver.curve_joints import ArcLength, CurveSliding, Rolling
 from solver.curves import circle
 from solver.element import Element, ElementSet
-from solver.forces import Gravity
-from solver.joints import Revolute
+from solver.forces import AppliedLoad, Gravity, RelativeRotation, Spring
+from solver.joints import Revolute, Spherical
 from solver.model import Model
 from solver.state import FIRST, StateBlock
 
@@ -167,3 +176,104 @@ def rolling_disc(theta0, R=1.0, r=0.25, m=3.0, gravity=True):
     if gravity:
         model.add(Gravity((0.0, -G, 0.0)))
     return model, j, arc, roll, link, disc
+
+
+def pendulum(theta0, m=1.0, length=1.0):
+    """Slender rod (m, L) on a revolute about z at its end, released from rest at θ0 from −y."""
+    g0 = ground()
+    c = np.array([np.sin(theta0), -np.cos(theta0), 0.0]) * length / 2
+    rod = RigidBody("rod", m, inertia=(m * length**2 / 12, 0.0, m * length**2 / 12),
+                    position=c, orientation=rodrigues((0, 0, 1), theta0))
+    mod = Model()
+    mod.add(g0, rod, Revolute("pin", g0, rod, point=(0, 0, 0), axis=(0, 0, 1)),
+            Gravity((0, -G, 0)))
+    return mod
+
+
+def pendulum_period(theta0, m=1.0, length=1.0):
+    """T = 4 K(k) / ω0 with k = sin(θ0/2), ω0² = m g L/2 / (m L²/3) (K of parameter k²)."""
+    w0 = np.sqrt(m * G * length / 2 / (m * length**2 / 3))
+    return 4.0 * ellipk(np.sin(theta0 / 2) ** 2) / w0
+
+
+def oscillator(m=1.0, k=1.0, c=0.0, v0=1.0):
+    """Point mass on a spring (and damper) to ground at its initial position, no gravity."""
+    p = PointMass("m", m, velocity=(v0, 0.0, 0.0))
+    mod = Model()
+    mod.add(p, Spring("s", None, p, point=(0, 0, 0), stiffness=k, damping=c))
+    return mod
+
+
+def feedback_oscillator(moment: float, feedback: bool, spin: float = 0.0):
+    """Disc on a revolute, J φ̈ + c φ̇ + k φ = M cos Ωt (τ = 2π/Ω = 1 s), ω0 = 0.27 Ω and 1 %
+    damping (a rotor's lag mode), with the delayed feedback tuned for damping ratio 0.5 at ω0
+    (a = bω0 sin ω0τ / (1 − cos ω0τ), b = ζ J ω0: no stiffness change at ω0)."""
+    jz, tau = 1.0, 1.0
+    w0 = 0.27 * 2 * np.pi / tau
+    k, c = jz * w0**2, 2 * 0.01 * jz * w0
+    b = 0.5 * jz * w0 if feedback else 0.0
+    th = w0 * tau
+    a = b * w0 * np.sin(th) / (1 - np.cos(th))
+    n = np.array([0.0, 0.0, 1.0])
+    g0 = ground()
+    disc = RigidBody("disc", 1.0, inertia=(0.5, 0.5, jz), angular_velocity=spin * n)
+    mod = Model()
+    mod.add(g0, disc, Revolute("pin", g0, disc, point=(0, 0, 0), axis=n),
+            RelativeRotation("lag", None, disc, axis=n, stiffness=k, damping=c,
+                             delay=tau, delayed_stiffness=a, delayed_damping=b))
+    if moment:
+        mod.add(AppliedLoad("m", disc, moment=lambda t: (0.0, 0.0,
+                                                         moment * np.cos(2 * np.pi * t / tau))))
+    return mod, (jz, c, k, a, b, tau)
+
+
+def fd4(f, q, i, h):
+    """Fourth-order central difference of f along coordinate i (error O(h⁴) + eps/h)."""
+    e = np.zeros_like(q)
+    e[i] = h
+    return (-f(q + 2 * e) + 8 * f(q + e) - 8 * f(q - e) + f(q - 2 * e)) / (12 * h)
+
+
+def dense(vals, rows, cols, shape):
+    """The dense matrix of ``shape`` with the triplets ``vals`` summed at (rows, cols)."""
+    a = np.zeros(shape)
+    np.add.at(a, (rows, cols), vals)
+    return a
+
+
+# heavy top of Brüls, Cardona & Arnold (2012): mass, inertia, centre of mass, spin, gravity
+TOP_M = 15.0
+TOP_J = np.diag([0.234375, 0.46875, 0.234375])
+TOP_X = np.array([0.0, 1.0, 0.0])
+TOP_W = np.array([0.0, 150.0, -4.61538])
+TOP_G = np.array([0.0, 0.0, -9.81])
+
+
+def heavy_top():
+    """Brüls, Cardona & Arnold (2012): body frame = global frame at t = 0, so the body angular
+    velocity equals the global one; centre-of-mass velocity ω × x."""
+    g0 = ground()
+    top = RigidBody("top", TOP_M, inertia=np.diag(TOP_J), position=TOP_X,
+                    velocity=np.cross(TOP_W, TOP_X), angular_velocity=TOP_W)
+    mod = Model()
+    mod.add(g0, top, Spherical("tip", g0, top, point=(0, 0, 0)), Gravity(TOP_G))
+    return mod, top
+
+
+def zero_crossings(t, y, t_min=0.0):
+    """Zeros of the C² cubic spline through (t, y) (interpolation error O(h⁴))."""
+    r = CubicSpline(t, y).roots(extrapolate=False)
+    return r[r > t_min]
+
+
+def fitted_roots(seqs, order):
+    """Roots of the linear recurrence x_{n+p} = Σ c_k x_{n+p-k} fitted (least squares) to the
+    position and velocity sequences: the eigenvalues of the one-step amplification matrix
+    (Cayley–Hamilton), measured from the simulated free response only."""
+    rows, rhs = [], []
+    for s in seqs:
+        for n in range(len(s) - order):
+            rows.append(s[n : n + order][::-1])
+            rhs.append(s[n + order])
+    coef = np.linalg.lstsq(np.array(rows), np.array(rhs), rcond=None)[0]
+    return np.roots(np.concatenate([[1.0], -coef]))

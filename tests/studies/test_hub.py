@@ -21,6 +21,7 @@ from pipelines.cli import default_study
 from pipelines.sweep import run_sweep
 from studies.hub import SPEC, build
 from studies.parameters import ParameterError
+from tests.studies.helpers import hub_samples
 
 
 @pytest.fixture(scope="module")
@@ -248,14 +249,6 @@ def test_nonlinear_and_linear_starts_are_nearly_periodic():
             run({**given, "initial_state": start, "periodic_tolerance": fails})
 
 
-def _samples(ds) -> np.ndarray:
-    """The run's recorded rows as the sampler gives them: time, hub x, y and force x, y (fixed
-    frame), tuning-mass centre x, y, pin angles."""
-    return np.column_stack([ds["time"].values, *(ds[k].values for k in (
-        "hub_x_fixed", "hub_y_fixed", "hub_force_x_fixed", "hub_force_y_fixed",
-        "bifilar_cm_x_fixed", "bifilar_cm_y_fixed")), ds["pin_angle"].values.T])
-
-
 def test_default_run_stores_the_step_error_of_its_harmonics():
     """Each run estimates its harmonics' time-step error from the periodic response at twice
     the step, extrapolated from a few quarter-revolution iterates started on its own periodic
@@ -277,7 +270,7 @@ def test_default_run_stores_the_step_error_of_its_harmonics():
     assert np.isnan(coarse.attrs["step_error_estimate"])
     assert coarse.attrs["estimate_revolutions"] == 0
     omega = own.attrs["hub_speed"]
-    _, est = richardson(_samples(own), _samples(coarse), omega, 8, order=4)
+    _, est = richardson(hub_samples(own), hub_samples(coarse), omega, 8, order=4)
     assert 1e-3 < est.max() < 3e-3
     assert own.attrs["step_error_estimate"] == pytest.approx(est.max(), rel=0.03)
     # the default: the same run and estimate, its harmonics 0-8 moved by c(h) - c(2h) over 15.
@@ -288,7 +281,7 @@ def test_default_run_stores_the_step_error_of_its_harmonics():
     assert ds.attrs["richardson"] == 1 and ds.attrs["message"] == ""
     assert ds.attrs["step_error_estimate"] == pytest.approx(own.attrs["step_error_estimate"],
                                                             rel=1e-6)
-    c_own, c_ex = (referred_harmonics(_samples(d)[-40:], omega, 8) for d in (own, ds))
+    c_own, c_ex = (referred_harmonics(hub_samples(d)[-40:], omega, 8) for d in (own, ds))
     scale = np.abs(c_own).max(axis=0)
     moved = np.max(np.abs(c_ex - c_own) / scale)
     assert moved == pytest.approx(ds.attrs["step_error_estimate"], rel=1e-6)
@@ -311,7 +304,7 @@ def _exact_error(given: dict):
     holes = hub.holes_for(p)
 
     def error(ds) -> float:
-        rows = _samples(ds)[-ds.attrs["samples_per_rev"]:]
+        rows = hub_samples(ds)[-ds.attrs["samples_per_rev"]:]
         a, b = (referred_harmonics(r, p["hub_speed"], 8)
                 for r in (rows, hub.reduced_samples(p, holes, rows[:, 0])))
         return float(np.max(np.abs(a - b) / np.abs(b).max(axis=0)))

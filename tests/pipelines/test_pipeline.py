@@ -1,9 +1,9 @@
 """Pipeline tests: harmonics against exact signals, sweeps on a real dask cluster, the archive's
 CF layout, failure recording, resume after a kill, study validation, plots and the CLI.
 
-The hub model is not used: ``tests/pipeline_models.py`` is a small model in the same layout with
+The hub model is not used: ``tests/pipelines/models.py`` is a small model in the same layout with
 a closed-form steady state, so the archived harmonics can be checked against analysis. Workers
-import it as ``tests.pipeline_models:SPEC``, which needs the repository root on ``sys.path``
+import it as ``tests.pipelines.models:SPEC``, which needs the repository root on ``sys.path``
 (added below for this process, inherited by the spawned workers, and put on ``PYTHONPATH`` for
 subprocesses).
 """
@@ -49,11 +49,11 @@ from pipelines.sweep import (
 )
 from studies.harmonics import N_MAX, case_harmonics, harmonics
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 if str(REPO) not in sys.path:
     sys.path.insert(0, str(REPO))
-models = importlib.import_module("tests.pipeline_models")
-MODEL = "tests.pipeline_models:SPEC"
+models = importlib.import_module("tests.pipelines.models")
+MODEL = "tests.pipelines.models:SPEC"
 
 # Roundoff bound on harmonics of O(1) signals from an FFT of a few hundred samples.
 EXACT = 1e-12

@@ -26,7 +26,7 @@ from solver.air import FlightCondition
 from solver.inflow import DynamicInflow
 from solver.lifting_line import COMPLEX_STEP, LiftingLineSet
 from solver.system import System
-from tests.test_lifting_line import RHO, beam_line, rotor
+from tests.solver.lifting_line_models import RHO, beam_line, rotor
 
 TOL = 1e-13
 

@@ -22,26 +22,13 @@ from solver.model import Model
 from solver.simulation import simulate
 from solver.system import System
 from studies.measure import period_from_crossings
-from tests.models import G, rodrigues, rolling_disc
+from tests.solver.models import G, dense, fd4, rodrigues, rolling_disc
 
 SEED = 20240917
 Z = np.array([0.0, 0.0, 1.0])
 
 
 # ---------------------------------------------------------------------------- helpers
-def _fd4(f, q, i, h):
-    """Fourth-order central difference of f along coordinate i (error O(h⁴) + eps/h)."""
-    e = np.zeros_like(q)
-    e[i] = h
-    return (-f(q + 2 * e) + 8 * f(q + e) - 8 * f(q - e) + f(q - 2 * e)) / (12 * h)
-
-
-def _dense(vals, rows, cols, shape):
-    a = np.zeros(shape)
-    np.add.at(a, (rows, cols), vals)
-    return a
-
-
 def _cycloid_point(a, t):
     return np.array([a * (t + np.sin(t)), -a * (1.0 + np.cos(t)), 0.0])
 
@@ -123,8 +110,8 @@ def test_jacobian_matches_finite_differences(case):
     s = System(model)
     rng = np.random.default_rng(SEED)
     q = _random_q(s, j, rng, ETA[case.split("-")[0]])
-    g = _dense(s.jacobian_values(q, 0.0), s.G_rows, s.G_cols, (s.mh, s.n))
-    fd = np.column_stack([_fd4(lambda x: s.constraint(x, 0.0), q, i, 1e-4) for i in range(s.n)])
+    g = dense(s.jacobian_values(q, 0.0), s.G_rows, s.G_cols, (s.mh, s.n))
+    fd = np.column_stack([fd4(lambda x: s.constraint(x, 0.0), q, i, 1e-4) for i in range(s.n)])
     # measured max |G − FD| ≤ 2.8e-12 over the cases (FD truncation (1e-4)⁴·|C⁽⁵⁾| and roundoff
     # eps/h ≈ 1e-12); an error in one Jacobian entry would be O(1e-2) or more
     err = np.abs(g - fd).max() / max(1.0, np.abs(fd).max())
@@ -143,7 +130,7 @@ def test_discrete_jacobian_is_exact_secant(case):
     qi = _random_q(s, j, rng, eta)
     qf = qi + 0.05 * rng.standard_normal(s.n)
     qf[s.scalar_index[j.eta]] = eta + 0.037
-    gbar = _dense(s.discrete_jacobian_values(qi, qf, 0.0, 0.0), s.G_rows, s.G_cols,
+    gbar = dense(s.discrete_jacobian_values(qi, qf, 0.0, 0.0), s.G_rows, s.G_cols,
                   (s.mh, s.n))
     dc = s.constraint(qf, 0.0) - s.constraint(qi, 0.0)
     # measured ≤ 2.5e-16 absolute with |ΔC| up to 0.34: roundoff of a few products
@@ -151,7 +138,7 @@ def test_discrete_jacobian_is_exact_secant(case):
     # and Ḡ is a true secant, not any matrix with that product: close to G at the midpoint
     # (difference O(|Δq|²), |Δq| ≈ 0.1: measured ≤ 3.3e-2 on the circle, where |p'''| is
     # largest); a wrong block would be off by O(1)
-    gm = _dense(s.jacobian_values(0.5 * (qi + qf), 0.0), s.G_rows, s.G_cols, (s.mh, s.n))
+    gm = dense(s.jacobian_values(0.5 * (qi + qf), 0.0), s.G_rows, s.G_cols, (s.mh, s.n))
     assert np.abs(gbar - gm).max() < 0.1
 
 
@@ -167,13 +154,13 @@ def test_discrete_jacobian_small_eta_step(case, deta):
     qi = _random_q(s, j, rng, eta)
     qf = qi + 1e-6 * rng.standard_normal(s.n)
     qf[s.scalar_index[j.eta]] = eta + deta
-    gbar = _dense(s.discrete_jacobian_values(qi, qf, 0.0, 0.0), s.G_rows, s.G_cols,
+    gbar = dense(s.discrete_jacobian_values(qi, qf, 0.0, 0.0), s.G_rows, s.G_cols,
                   (s.mh, s.n))
     assert np.all(np.isfinite(gbar))
     dc = s.constraint(qf, 0.0) - s.constraint(qi, 0.0)
     # measured ≤ 3.3e-16 absolute (|ΔC| ~ 1e-6, |C| up to 1.8): exact to the roundoff of C
     assert np.abs(gbar @ (qf - qi) - dc).max() <= 1e-14
-    gm = _dense(s.jacobian_values(0.5 * (qi + qf), 0.0), s.G_rows, s.G_cols, (s.mh, s.n))
+    gm = dense(s.jacobian_values(0.5 * (qi + qf), 0.0), s.G_rows, s.G_cols, (s.mh, s.n))
     # |Δq| ≈ 1e-6 so Ḡ − G(q_m) = O(1e-12); measured ≤ 2.7e-12. A wrong fallback (e.g. a zero
     # or one-sided η column) would differ by O(1e-6) or more
     assert np.abs(gbar - gm).max() < 1e-10
@@ -194,8 +181,8 @@ def test_nonholonomic_derivative_matches_finite_differences(curve):
     s = System(model)
     q = _random_q(s, j, rng, eta, scale=0.1)
     dq = rng.standard_normal(s.n)
-    d = _dense(s.nonholonomic_derivative(q, dq), s.A_rows - s.mh, s.A_cols, (s.mn, s.n))
-    fd = np.column_stack([_fd4(lambda x: s.nonholonomic_residual(x, dq), q, i, 1e-4)
+    d = dense(s.nonholonomic_derivative(q, dq), s.A_rows - s.mh, s.A_cols, (s.mn, s.n))
+    fd = np.column_stack([fd4(lambda x: s.nonholonomic_residual(x, dq), q, i, 1e-4)
                           for i in range(s.n)])
     # measured max |D − FD| ≤ 2.9e-12 (FD error, |D| up to 8); a missing term is O(0.1)
     assert np.abs(d - fd).max() < 1e-9 * max(1.0, np.abs(fd).max())
@@ -212,8 +199,8 @@ def test_arc_length_row_is_parametric_speed():
     for eta in (0.2, 0.5, 0.77):
         q = s.q0_raw.copy()
         q[ie] = eta
-        a = _dense(s.nonholonomic_values(q), s.A_rows - s.mh, s.A_cols, (s.mn, s.n))
-        speed = np.linalg.norm(_fd4(lambda x: j.curve.point(x[0]), np.array([eta]), 0, 1e-4))
+        a = dense(s.nonholonomic_values(q), s.A_rows - s.mh, s.A_cols, (s.mn, s.n))
+        speed = np.linalg.norm(fd4(lambda x: j.curve.point(x[0]), np.array([eta]), 0, 1e-4))
         # η = (t + π)/(2π): |p'| = 2π·2a|cos(t/2)| with a = 0.4; FD error ~1e-12
         t = 2 * np.pi * eta - np.pi
         assert abs(speed - 2 * np.pi * 0.8 * abs(np.cos(t / 2))) < 1e-8
@@ -237,7 +224,7 @@ def test_rolling_row_is_relative_spin_about_the_axis():
         v[o + 3 : o + 12] = np.cross(w, r.T).ravel()
     sdot = 0.7
     v[s.scalar_index[arc.s]] = sdot
-    a = _dense(s.nonholonomic_values(q), s.A_rows - s.mh, s.A_cols, (s.mn, s.n))
+    a = dense(s.nonholonomic_values(q), s.A_rows - s.mh, s.A_cols, (s.mn, s.n))
     od = s.offset[disc]
     row = int(np.flatnonzero(np.abs(a[:, od + 3 : od + 12]).max(axis=1) > 0)[0])  # rolling
     got = s.nonholonomic_residual(q, v)[row]

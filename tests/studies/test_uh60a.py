@@ -30,7 +30,7 @@ from solver.sections import SectionTable
 from studies import uh60a
 from studies.uh60a import UH60A, blade_sections, parse_dymore
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 R, E, OMEGA = UH60A.radius, UH60A.hinge_radius, UH60A.omega_ref
 
 

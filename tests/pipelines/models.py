@@ -17,7 +17,7 @@ Test hooks: ``delay`` sleeps (to interrupt a sweep mid-run), ``run_log`` appends
 run (to count computations across processes), ``fail`` raises or returns a result marked failed,
 and a negative ``absorber_damping_ratio`` makes the system unstable, which :func:`run` detects.
 
-Workers find this model as ``model = "tests.pipeline_models:SPEC"`` (the repository root must be
+Workers find this model as ``model = "tests.pipelines.models:SPEC"`` (the repository root must be
 on their ``sys.path``).
 """
 
@@ -228,7 +228,7 @@ def run(params: dict[str, Any]) -> xr.Dataset:
 SPEC = ModelSpec(
     name="pipeline-test-2dof",
     parameters=PARAMETERS,
-    run=run,
+    simulate=run,
     check=check,
     description="hub on a fuselage spring with a tuned absorber, exact steady state",
     outputs=OUTPUTS,

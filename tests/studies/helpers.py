@@ -1,0 +1,13 @@
+"""Helpers shared by the study tests."""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def hub_samples(ds) -> np.ndarray:
+    """The run's recorded rows as the sampler gives them: time, hub x, y and force x, y (fixed
+    frame), tuning-mass centre x, y, pin angles."""
+    return np.column_stack([ds["time"].values, *(ds[k].values for k in (
+        "hub_x_fixed", "hub_y_fixed", "hub_force_x_fixed", "hub_force_y_fixed",
+        "bifilar_cm_x_fixed", "bifilar_cm_y_fixed")), ds["pin_angle"].values.T])
