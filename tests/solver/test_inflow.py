@@ -193,6 +193,59 @@ def test_hover_harmonic_loading_converges_to_actuator_disk(r, lowest):
     assert np.all(np.diff(out) < 0) and 0.5 < out[-1] < 0.508, out
 
 
+def _disk_quadrature(n_radial: int = 120, n_azimuth: int = 64):
+    """Points (r̄, ψ) and area weights r̄ dr̄ dψ on the unit disk, exact for the Peters–He
+    integrands: r̄ = sin θ turns ν = √(1 − r̄²) = cos θ and r̄ dr̄ into trigonometric
+    polynomials in θ (Gauss–Legendre), and the azimuth is a trigonometric polynomial."""
+    x, w = np.polynomial.legendre.leggauss(n_radial)
+    theta = (x + 1.0) * math.pi / 4.0
+    rb = np.sin(theta)
+    wr = w * math.pi / 4.0 * rb * np.cos(theta)
+    psi = 2.0 * math.pi * np.arange(n_azimuth) / n_azimuth
+    rr, pp = np.meshgrid(rb, psi, indexing="ij")
+    return rr, pp, np.outer(wr, np.full(n_azimuth, 2.0 * math.pi / n_azimuth))
+
+
+@pytest.mark.parametrize("r,power", [(1, 7), (2, 8), (3, 9), (5, 9)])
+def test_hover_pressure_modes_give_the_exact_galerkin_inflow(r, power):
+    # A disk loading built from the Peters–He pressure modes P̄_n^r(ν) cos rψ = ν φ_n^r cos rψ
+    # (n ≤ P + 1), on top of a uniform thrust. Linear actuator-disk theory in hover: the
+    # perturbation inflow is ΔC_p / (2 V_m) at every point (the disturbance pressure is odd in
+    # z: the disk sees half the jump, carried by the perturbation mass flow V_m = 2 λ_m). That
+    # inflow is not a finite sum of the shapes φ_j^r (it carries the factor ν), but a
+    # truncated Peters–He set whose pressure modes hold the loading gives exactly its
+    # Galerkin coefficients: α_j = ∫ λ φ_j^r ν dA / ∫ (φ_j^r)² ν dA, evaluated here by
+    # quadrature. This checks the in-harmonic coupling Γ_jn^rr, the ½τ normalization of the
+    # load weights and the shapes of every radial order at once. Measured: 4e-13.
+    e = inflow(harmonics=max(r, 3), power=power)
+    rr, pp, w = _disk_quadrature()
+    nu = np.sqrt(1.0 - rr**2)
+
+    def radial(x):  # a loading of the pressure modes n = r+1, r+3, r+5
+        return 0.004 * x**r * (1.0 - 0.6 * x**2 + 0.25 * x**4)
+
+    ct = 0.0063
+    dcp = ct + nu * radial(rr) * np.cos(r * pp)
+    xi, eta = rr * np.cos(pp), rr * np.sin(pp)
+    f = np.einsum("ijk,ij->k", e.load_weights(xi, eta), dcp * w)
+    alpha = e.steady_states(f)
+    flow = e.flow(alpha)
+    assert flow.v_m == pytest.approx(2.0 * flow.lambda_m, rel=1e-14)  # hover
+    rb, wr = rr[:, 0], w[:, 0]  # r̄ dr̄ (times a constant that cancels)
+    nu1 = np.sqrt(1.0 - rb**2)
+    lam = nu1 * radial(rb) / (2.0 * flow.v_m)
+    checked = 0
+    for i, (kind, rs, j) in enumerate(e.harmonic_indices):
+        if kind == "c" and rs == r:
+            phi = rb**r * np.polyval(peters_he_shape_coefficients(r, j)[::-1], rb**2)
+            exact = np.sum(wr * nu1 * lam * phi) / np.sum(wr * nu1 * phi**2)
+            assert alpha[i] == pytest.approx(exact, rel=1e-11, abs=1e-13 * abs(lam).max())
+            checked += 1
+        elif rs != 0:  # no other harmonic is loaded, and in hover none couples
+            assert abs(alpha[i]) < 1e-15
+    assert checked == len(range(r + 1, power + 2, 2))
+
+
 # ---------------------------------------------------------------- 3. Pitt–Peters steady state
 @pytest.mark.parametrize("ct", [1e-4, 1e-3, 0.00567, 0.02, 0.1, -0.004])
 def test_pitt_peters_hover_is_momentum_theory(ct):
