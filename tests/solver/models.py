@@ -13,6 +13,10 @@
 * :func:`heavy_top` — the heavy top of Brüls, Cardona & Arnold (2012).
 * :func:`zero_crossings`, :func:`fitted_roots` — zeros of a spline through samples, roots of
   the one-step recurrence fitted to a free response.
+* :func:`period_from_crossings` — a period from same-direction zero crossings.
+* :func:`collar_on_cycloid` — a collar sliding on a hanging cycloid.
+* :func:`hub_rolling_disc` — a disc rolling in a hole of a spinning hub, with rolling
+  resistance (a bifilar pin in miniature: curve joint, rolling, damper and a driver).
 * :func:`fd4`, :func:`dense` — fourth-order central differences, triplets to a dense matrix.
 """
 
@@ -24,9 +28,9 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 from scipy.special import ellipk
 
-from solver.bodies import PointMass, RigidBody, ground
+from solver.bodies import PointMass, RigidBody, ground, spinning
 from solver.curve_joints import ArcLength, CurveSliding, Rolling
-from solver.curves import circle
+from solver.curves import circle, cycloid
 from solver.element import Element, ElementSet
 from solver.forces import AppliedLoad, Gravity, RelativeRotation, Spring
 from solver.joints import Revolute, Spherical
@@ -277,3 +281,67 @@ def fitted_roots(seqs, order):
             rhs.append(s[n + order])
     coef = np.linalg.lstsq(np.array(rows), np.array(rhs), rcond=None)[0]
     return np.roots(np.concatenate([[1.0], -coef]))
+
+
+def period_from_crossings(t, x):
+    """Period of an oscillation x(t) about zero: the mean of the least-squares slopes of its
+    upward and of its downward crossing times (each located on the spline through the samples,
+    error O(h⁴)) against their index. Same-direction crossings are one period apart, so an
+    oscillation that is not symmetric about zero gives no bias."""
+    tc = zero_crossings(t, x)
+    return float(np.mean([np.polyfit(np.arange(len(tc[k::2])), tc[k::2], 1)[0]
+                          for k in (0, 1)]))
+
+
+def collar_on_cycloid(theta0, a=0.25, mass=2.0, inertia=0.02, g=G):
+    """A collar (mass, polar inertia) sliding on the hanging cycloid of constant ``a`` (lowest
+    point (0, −2a), :func:`solver.curves.cycloid`) under gravity −g along y, turning with the
+    curve's tangent, released at rest with the tangent θ0 (rad) from the horizontal (cycloid
+    parameter t = 2θ0). Returns the model."""
+    g0 = ground()
+    t = 2.0 * theta0
+    pos = np.array([a * (t + np.sin(t)), -a * (1.0 + np.cos(t)), 0.0])
+    collar = RigidBody("collar", mass, inertia=(0.5 * inertia, 0.5 * inertia, inertia),
+                       position=pos, orientation=rodrigues((0.0, 0.0, 1.0), theta0))
+    joint = CurveSliding("slide", g0, cycloid(a), collar, rotation=True)
+    model = Model()
+    model.add(g0, collar, joint, ArcLength(joint), Gravity((0.0, -g, 0.0)))
+    return model
+
+
+def hub_rolling_disc(theta0, omega=27.0, arm=0.4, R=0.05, r=0.015, m=1.0, damping=0.0):
+    """A bifilar pin in miniature: a disc (radius r, mass m) rolling inside a circular hole
+    (radius R) of a hub spun at a prescribed Ω (rad/s) about z, the hole's centre ``arm`` (m)
+    from the axis, with rolling resistance ``damping`` (N·m·s/rad, torque per relative angular
+    rate between the disc and its contact link). No gravity: the centrifugal field swings the
+    disc about the hole's outermost point.
+
+    A massless link slides on the hole with the Frenet triad (t, n, b) locked to it; the disc
+    centre is at contact + r n, revolute to the link about z; rolling ṡ + r (ω_disc − ω_link)·z
+    = 0. Released at rest relative to the hub with the contact θ0 (rad) round the hole from
+    its outermost point (every body moving with the hub: v = Ω ẑ × x, ω = Ω ẑ, so the rolling
+    and sliding relations hold at t = 0).
+
+    Returns (model, hub, disc).
+    """
+    z = np.array([0.0, 0.0, 1.0])
+    w = omega * z
+    hub = spinning("hub", omega)
+    centre = np.array([arm, 0.0, 0.0])
+    hole = circle(R, center=centre, start_angle=np.pi)  # seam innermost, outermost at η = 1/2
+    contact = centre + R * np.array([np.cos(theta0), np.sin(theta0), 0.0])
+    frame = rodrigues(z, theta0 + 0.5 * np.pi)  # columns t (counter-clockwise), n (inward), z
+    disc_c = contact + r * frame[:, 1]
+    link = RigidBody("link", 0.0, position=contact, orientation=frame,
+                     velocity=np.cross(w, contact), angular_velocity=w)
+    ip = 0.5 * m * r * r
+    disc = RigidBody("disc", m, inertia=(0.5 * ip, 0.5 * ip, ip), position=disc_c,
+                     orientation=frame, velocity=np.cross(w, disc_c), angular_velocity=w)
+    j = CurveSliding("slide", hub, hole, link, rotation=True)
+    arc = ArcLength(j)
+    model = Model()
+    model.add(hub, link, disc, j, Revolute("rev", link, disc, point=disc_c, axis=z), arc,
+              Rolling("roll", arc, disc, link, r, side=1))
+    if damping > 0.0:
+        model.add(RelativeRotation("rolling_resistance", link, disc, axis=z, damping=damping))
+    return model, hub, disc

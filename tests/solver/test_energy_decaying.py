@@ -25,8 +25,16 @@ from solver.joints import Revolute
 from solver.model import Model
 from solver.simulation import simulate
 from solver.system import System
-from studies import bifilar, collar
-from tests.solver.models import G, fitted_roots, heavy_top, oscillator, rodrigues, zero_crossings
+from tests.solver.models import (
+    G,
+    collar_on_cycloid,
+    fitted_roots,
+    heavy_top,
+    hub_rolling_disc,
+    oscillator,
+    rodrigues,
+    zero_crossings,
+)
 
 
 def pade12(z: complex) -> complex:
@@ -121,11 +129,6 @@ def torsion_pendulum(theta0: float, k: float = 20.0, m: float = 1.0, r: float = 
     return mod
 
 
-def _collar(curve: str, inertia: float):
-    p = collar.SPEC.complete({"curve": curve, "theta0": 60.0, "inertia": inertia})
-    return collar.build(p)[0], collar.analytic_period(p)
-
-
 CONSERVATIVE = {
     # name: (model, step sizes, steps); the heavy top spins at 150 rad/s (ωh up to 3)
     "heavy top": (lambda: heavy_top()[0], [1e-4, 1e-3, 2e-2], 100),
@@ -133,7 +136,7 @@ CONSERVATIVE = {
     "elastic pivot": (lambda: elastic_pivot_pendulum(np.radians(90), 1e8), [1e-5, 1e-3, 0.1],
                       100),
     "torsion pendulum": (lambda: torsion_pendulum(np.radians(90)), [1e-3, 0.02, 0.1], 100),
-    "collar cycloid": (lambda: _collar("cycloid", 0.02)[0], [1e-3, 0.05, 0.2], 100),
+    "collar cycloid": (lambda: collar_on_cycloid(np.radians(60.0)), [1e-3, 0.05, 0.2], 100),
 }
 
 
@@ -181,15 +184,16 @@ def test_balance_with_driver_dampers_and_load(h):
     assert np.diff(e - w).max() <= 1e-13 * scale
 
 
-def test_bifilar_on_spinning_hub_balance():
-    """The bifilar (nonholonomic rolling, curve joints, pin dampers) on its prescribed hub."""
-    p = bifilar.SPEC.complete({"hole": "epicycloid", "amplitude": 20.0, "pin_damping": 0.02})
-    t_lin = 2 * np.pi / (p["hub_speed"] * p["tuning_order"])
+def test_rolling_on_spinning_hub_balance():
+    """A bifilar pin in miniature (nonholonomic rolling, a curve joint, rolling resistance) in
+    the hole of its prescribed hub."""
+    model, _hub, _disc = hub_rolling_disc(np.radians(20.0), damping=1e-4)
+    period = 2 * np.pi / 27.0 / 3  # about the swing's period (tuning order ≈ 3)
     for n in (10, 200):
-        e, w, d = march(bifilar.build(p)[0], t_lin / n, 100)
+        e, w, d = march(model, period / n, 100)
         scale = np.abs(e).max()
         assert np.abs(w).max() > 1e-3 * scale
-        assert np.abs(e - w + d - e[0]).max() <= 1e-12 * scale  # measured ≤ 9e-15
+        assert np.abs(e - w + d - e[0]).max() <= 1e-12 * scale  # measured ≤ 3.8e-15
         assert np.diff(d).min() >= 0.0
 
 
@@ -267,16 +271,15 @@ def test_newton_matrix_keeps_one_pattern():
     assert lu.fresh <= 1 and lu.refactored >= 49
 
 
-@pytest.mark.parametrize("name", ["bifilar", "driven rod", "heavy top"])
+@pytest.mark.parametrize("name", ["rolling on hub", "driven rod", "heavy top"])
 def test_end_velocity_is_tangent_to_the_constraints(name):
     """The step's constraint force acts through the chord only, so the rows alone leave a
     velocity component normal to the constraints undamped: it alternated in sign from step
     to step and, fed by the aerodynamic loads, grew until Newton failed on the rotor in
     forward flight. The end velocity is projected (M-closest) onto G(q)v + ∂C/∂t = 0,
     A(q)v = 0; the projection's kinetic-energy loss is booked as numerical dissipation."""
-    if name == "bifilar":
-        p = bifilar.SPEC.complete({"hole": "epicycloid", "amplitude": 20.0})
-        model, h = bifilar.build(p)[0], 2 * np.pi / (p["hub_speed"] * p["tuning_order"]) / 20
+    if name == "rolling on hub":
+        model, h = hub_rolling_disc(np.radians(20.0))[0], 2 * np.pi / 27.0 / 3 / 20
     elif name == "driven rod":
         model, h = driven_damped_loaded(), 1e-2
     else:
