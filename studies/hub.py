@@ -18,47 +18,21 @@ The model (paper Fig. 13, Table 1, with the fuselage-beam reduced to springs and
   as the paper describes for a four-bladed rotor.
 
 The pins dissipate a little (rolling resistance), modelled as a rotational damper on each pin's
-rotation relative to its arm-side link, sized from a pendulum damping ratio; the free pendulum
-transient then decays and the response is periodic when two successive revolutions give the
-same harmonics within ``periodic_tolerance``. Whole revolutions are then recorded.
+rotation relative to its arm-side link, sized from a pendulum damping ratio.
 
-The run starts from the periodic response of the same model written on its swing coordinates
-(``initial_state``, :func:`nonlinear_start`: :mod:`studies.reduced_hub`, the hub centre and each
-bifilar's path parameter, exact for rigid bodies rolling without sliding, solved by harmonic
-balance), so only the time step's error is transient: the first two revolutions of a free case
-differ by 0.14 % (0.86 % from the linear response, :func:`linear_response`; 81 % from rest).
-The periodic response is then reached by shooting on the quarter-revolution map (the model is
-symmetric under a quarter turn of the hub with the bifilars permuted, :func:`symmetry`): the
-quarter-revolution iterates are extrapolated to their fixed point and the model restarts from
-it (:func:`studies.periodic.shoot`), 5.5 revolutions for a free case, recorded ones included
-(4.5 from the linear start, 7.75 from rest, 24 by plain marching: the small transient the
-nonlinear start leaves spreads over more modes, but the restart then hits the periodic
-response to 2e-6 instead of 4e-4). The time integration is the energy-preserving ``ep`` step,
-symmetric and of order 2, composed into a fourth-order step (``composition``, default
-Suzuki's five substeps: :mod:`solver.composition`): at the default 40 steps/rev the harmonics
-0–8 are within 0.19 % of the exact equations' on the free case (the plain ``ep`` at 160
-steps/rev: 3.3 %), at the cost of 200 substeps per revolution, but 0.90 % at 3.3P tuning with
-1.5 times the fuselage stiffness (a 24° swing).
+The run starts from the periodic response of the same model on its swing coordinates
+(``initial_state``, :func:`nonlinear_start`: :mod:`studies.reduced_hub`, exact for rigid
+bodies rolling without sliding, solved by harmonic balance), so that only the time step's
+error is transient. It reaches the periodic response by shooting on the quarter-revolution map
+(the model is symmetric under a quarter turn of the hub with the bifilars permuted,
+:func:`symmetry`; :func:`studies.periodic.shoot`) and records whole revolutions. The time
+integration is the energy-preserving ``ep`` step composed into a fourth-order step
+(``composition``, :mod:`solver.composition`). Each run also computes the periodic response at
+about twice the step (:func:`studies.periodic.sector_response`), which gives the step-error
+estimate of the harmonics (``error_estimate``) and, with ``richardson``, harmonics 0–8
+extrapolated to zero step (:func:`studies.periodic.richardson`).
 
-So each run also computes the response at about twice the step: from the recorded run's end
-state, a few quarter revolutions at 2h are extrapolated to that step's periodic response
-(:func:`studies.periodic.sector_response`). The slow modes the coarse iterates relax along
-are those shooting extrapolated at the step, so its iterates (the record's ``iterates``:
-those a restart was extrapolated from, and those marched since until they settled) give the
-secant pairs of a Newton step to that response from the second coarse iterate on: 1–1.75
-revolutions at 2h, where the coarse iterates alone needed 2.5–4.25 to span the slow modes (an
-estimate counts only while the pairs explain the coarse changes). The harmonics 0–8 at the two
-steps give the error estimate |c(h) − c(2h)|/15 (:func:`studies.periodic.richardson`; /3 for
-the plain step), stored as ``step_error_estimate`` (``error_estimate``): 1.71e-3 on the free
-case against its measured 1.92e-3, 8.0e-3 against 9.0e-3 in that corner. With ``richardson``
-(default) the recorded harmonics 0–8 are extrapolated to zero step, the h⁴ term of a composed
-run or the h² term of a plain one taken out: 2.3e-4 and 1.2e-3 from the exact equations'
-harmonics in those two cases.
-
-Measured against the harmonic balance over issue 14's 60-case sweep (tuning 2.7–3.3P, 0.5–1.5
-times the fuselage stiffness, swings 2–24°): 6.4 revolutions per case on average, at most
-7.25, every case restarting once or twice; extrapolated harmonics within 2.2e-3, median
-4.1e-4. The Table 1 cases take 4.25–5.75 revolutions.
+``docs/models.md`` gives the assumptions, the defaults and the measured accuracy.
 """
 
 from __future__ import annotations

@@ -19,9 +19,8 @@ The model, built from solver parts:
   a revolute about the span axis driven by the swashplate: θ_k = θ0 + θc cos ψ_k + θs sin ψ_k
   (no swashplate phase, no pitch-link flexibility, no δ3). The collective is measured in the
   twist reference of the Dymore deck (aero twist zero at 0.69R), the one consistent with a
-  loaded rotor (``../shared/notes/next_wave.md`` §6). A linear rotational lag damper on each
-  lag hinge (GenHel's 1500 lb·s/ft stroke damper in rotational form, 1.07 kN·m·s/rad); no lag
-  spring (the fan plot's free hinge).
+  loaded rotor. A linear rotational lag damper on each lag hinge (GenHel's 1500 lb·s/ft stroke
+  damper in rotational form, 1.07 kN·m·s/rad); no lag spring (the fan plot's free hinge).
 * aerodynamics — a :class:`~solver.lifting_line.LiftingLine` on each blade (Peters
   finite-state sections: lift slope 5.73 /rad, c_d0 0.008, the deck's chord and aero twist,
   tip loss 0.95R) and one Peters–He :class:`~solver.inflow.DynamicInflow` (``inflow_harmonics``)
@@ -31,46 +30,27 @@ The model, built from solver parts:
   :mod:`studies.equivalent` on the shaft head in their place).
 * time integration — generalized-α with ρ∞ = ``rho_inf`` (0.5), ``steps_per_rev`` (240) steps
   per revolution. The tuned absorbers' notch is as sensitive to the scheme's frequency error as
-  to the pins' 1 % damping: at 120 steps/rev ρ∞ = 0.5 lowers a 3P oscillation's frequency by
-  0.31 % and a 4P one's by 0.54 % (ρ∞ = 0, ``ed``: 1.07 % and 1.83 %, plus 0.18 % and 0.40 % of
-  numerical damping), and the bifilars (tuned in the rotating frame) and their equivalent (in
-  the fixed frame) are detuned differently. Measured on the tuned case: its 4P hub force is
-  27 % below the step-converged value (Richardson, from 120 and 240 steps) at 120 steps/rev
-  and 7 % at 240, where the equivalent agrees with the bifilars within 4 %; 240 steps cost
-  1.6–1.9 times the time of 120 (Newton needs 2.9 iterations per step instead of 4.6).
-  ρ∞ = 0.8 diverges in the first revolutions (the wake states of the tip sections, u h/b ≫ 1,
-  need the stronger damping).
+  to the pins' 1 % damping, and the bifilars (tuned in the rotating frame) and their equivalent
+  (in the fixed frame) are detuned differently by it, hence the fine step.
 
-No gravity (the paper's example has none). The run marches whole revolutions until the
-harmonics of the hub motion (rotating frame), the transmitted in-plane force and the pin angles
-repeat (:mod:`studies.periodic`: means and vibratory harmonics judged apart, x and y of a
-vector on one scale), then records ``revolutions`` revolutions. The lag mode (0.27/rev, about
-3 % damping, a factor 0.95 per revolution) is the slowest transient:
+No gravity (the paper's example has none). The response is periodic when the harmonics of the
+hub motion (rotating frame), the transmitted in-plane force and the pin angles repeat from one
+revolution to the next (:mod:`studies.periodic`); ``revolutions`` revolutions are then
+recorded. The coupled lag / fuselage mode is the slowest transient, so during the first
+``settle_revolutions`` revolutions the lag and fuselage dampers are multiplied by a factor
+falling from ``settle_damping_factor`` to 1 (a gradual change: a sudden switch would restart
+the transient). The pin dampers stay nominal throughout: the absorbers' forced response
+depends on their damping.
 
-- during the first ``settle_revolutions`` revolutions the lag and fuselage dampers are
-  multiplied by a factor falling from ``settle_damping_factor`` to 1, after which the run
-  continues from that state with the nominal ones (a sudden switch would restart the
-  transient: the steady 1P lag response itself depends on the damping);
-- then, while the run marches to its periodic response, each lag damper also carries delayed
-  feedback −a[ζ(t) − ζ(t − T)] − b[ζ̇(t) − ζ̇(t − T)] over one revolution T
-  (:func:`lag_feedback_gains`, damping ratio ``lag_feedback``). It vanishes on any response
-  of period T, so it damps the lag transient (about 0.5 per revolution) without changing the
-  periodic response it converges to; once periodic it is removed and the recorded
-  revolutions are the nominal model's. The free case's transient fell from 35 to 23
-  revolutions (the 1P hub force the lag mode carries no longer dominates the periodicity
-  test; the bifilars' 1 %-damped swing is now the slowest).
+After settling the run shoots (``shooting_window`` > 0): the model is symmetric under a quarter
+revolution with the blades and bifilars permuted (:func:`symmetry`), and
+:func:`studies.periodic.shoot` extrapolates the quarter-revolution iterates to their fixed
+point and restarts the model from it (beam nodes' and bodies' triads combined on the rotation
+group). With ``shooting_window = 0`` it marches instead, and each lag damper then also carries
+delayed feedback over one revolution (:func:`lag_feedback_gains`, damping ratio
+``lag_feedback``), which vanishes on any periodic response and is removed before recording.
 
-The pin dampers stay nominal throughout (the absorbers' forced response depends on their
-damping, and their free swing at 3P is a mode a one-revolution delay cannot see).
-
-By default (``shooting_window`` > 0) the run shoots instead of marching after settling: the
-model is symmetric under a quarter revolution with the blades and bifilars permuted
-(:func:`symmetry`), and :func:`studies.periodic.shoot` extrapolates the quarter-revolution
-iterates to their fixed point and restarts the model from it (beam nodes' and bodies' triads
-combined on the rotation group). The lag feedback is then not used (a restart cannot carry
-its delay line); the free case is periodic after 17 revolutions in all (6 settling) instead
-of 25, with the four pins' 3P amplitudes equal to 1e-3 where the marched run left them 3 %
-apart.
+``docs/models.md`` gives the assumptions, the defaults and the measured accuracy.
 """
 
 from __future__ import annotations
