@@ -67,7 +67,8 @@ def cluster(tmp_path):
 
     try:
         start("scheduler", _dask("scheduler", "--host", "127.0.0.1", "--port", "0",
-                                 "--no-dashboard", "--scheduler-file", str(sched_file)))
+                                 "--no-dashboard", "--dashboard-address", "127.0.0.1:0",
+                                 "--scheduler-file", str(sched_file)))
         _wait_for(lambda: sched_file.exists() and sched_file.stat().st_size > 0,
                   START_TIMEOUT, "the scheduler file")
         address = json.loads(sched_file.read_text())["address"]

@@ -219,14 +219,7 @@ def test_run_case_records_failure_as_a_value(tmp_path, fail, match):
 # --- sweeps on a real cluster -------------------------------------------------------------------
 
 
-@pytest.fixture(scope="module")
-def scheduler():
-    """A local cluster of 2 worker processes shared by this module's sweeps (address)."""
-    from distributed import LocalCluster
-
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                      dashboard_address=None) as cluster:
-        yield cluster.scheduler_address
+# ``scheduler`` (tests/conftest.py): a local cluster of 2 worker processes on free ports.
 
 
 def test_local_cluster_workers_start_with_the_solvers_malloc_thresholds(monkeypatch):
