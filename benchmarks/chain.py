@@ -1,4 +1,4 @@
-"""N-link pendulum chain benchmark (issue 2).
+"""N-link pendulum chain benchmark.
 
 Each link: 1 kg, a 1 m slender rod; revolute joints about the global z axis, the first to
 ground; gravity 9.81 m/s² along −y; released horizontal (links along +x); h = 1e-3 s.

@@ -1,4 +1,4 @@
-"""The N-link chain side by side with Exudyn (issue 13's goal), at equal accuracy.
+"""The N-link chain side by side with Exudyn, at equal accuracy.
 
 Both codes integrate the chain of ``benchmarks/chain.py`` (1 kg, 1 m slender links on
 revolute joints about z, released horizontal under gravity) for 1 s at h = 1 ms with

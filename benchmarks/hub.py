@@ -8,7 +8,7 @@ directories, nothing resumed) and prints one JSON object per run with the wall t
 per hour and each case's solver time and steps per second. ``--profile`` also profiles one case
 in this process (pyinstrument if installed, else cProfile) and prints where the time goes.
 
-``--case`` measures issue 13's per-case goals side by side in one process: one free case at the
+``--case`` measures the cost of one case side by side in one process: one free case at the
 defaults (the composed fourth-order step, its step-error estimate and the harmonics extrapolated
 to zero step), without the extrapolation (``richardson = false``) and without either
 (``error_estimate = false`` too), alternately, each ``--repeat`` times after a warm-up run

@@ -1,4 +1,4 @@
-"""Issue 14's benchmark: a 60-case sweep of the hub model, with 1 and with 2 workers.
+"""A 60-case sweep of the hub model, with 1 and with 2 workers.
 
     python benchmarks/sweep60.py --workers 1 2                        # the full 60 cases
     python benchmarks/sweep60.py --workers 1 2 --cases 6 --steps-per-rev 64 --max-revolutions 6

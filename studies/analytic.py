@@ -1,6 +1,6 @@
 """Closed-form and quadrature results the studies are validated against.
 
-Each formula cites the paper (``../shared/paper``) as corrected by its errata.
+Each formula cites the paper (Bauchau, Rodriguez & Chen, JAHS 2003) as corrected by its errata.
 """
 
 from __future__ import annotations

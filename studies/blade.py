@@ -2,11 +2,10 @@
 
 The blade (``studies.uh60a``: Yeo's section properties with the Davis cuff) is a
 geometrically exact beam of cubic elements from the hinge to the tip, on a hub spinning about
-+z (counter-clockwise seen from above, as the UH-60A). The hinge arrangement is the one of
-``../shared/notes/next_wave.md`` §2.1: flap and lag revolutes at one point e = 0.381 m, flap
-first going outboard, joined by a massless link; the pitch bearing is locked (rigid pitch link,
-the reference arrangement for the published frequencies), and the lag hinge has neither damper
-nor spring (undamped frequencies).
++z (counter-clockwise seen from above, as the UH-60A). The hinge arrangement: flap and lag
+revolutes at one point e = 0.381 m, flap first going outboard, joined by a massless link; the
+pitch bearing is locked (rigid pitch link, the reference arrangement for the published
+frequencies), and the lag hinge has neither damper nor spring (undamped frequencies).
 
 The fan plot (Campbell diagram) is the set of natural frequencies of the linearized model about
 its steady spin at each rotor speed (:func:`solver.modes.natural_frequencies`, rotating frame).

@@ -70,7 +70,7 @@ z = Z e^{iωt} (ω > 0 progressive, ω < 0 regressive) gives the apparent mass F
 
     M_eff(ω) = M + m_e ω² / (ñ²Ω² − (ω − Ω)² + i (c_φ/J)(ω − Ω)),
 
-which for a simple pendulum (B = m r, J = m r², m_e = N m/2) is the notes' (§5)
+which for a simple pendulum (B = m r, J = m r², m_e = N m/2) is the classical
 N m [1 + ω²/(2(ñ²Ω² − (ω ∓ Ω)²))] for progressive/regressive whirl at |ω|. The reconstruction
 inverts w = i (J/B) A: A = −i (B/J) w, φ_k = Re(A e^{−iψ_k}); the tuning masses' centre of mass
 moves by (1/N) Σ_k i r e^{iψ_k} φ_k = (i r/2) A = (r B/(2J)) w relative to the hub centre.

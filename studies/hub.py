@@ -149,8 +149,8 @@ PARAMETERS: dict[str, Param] = {
                                 exclusive_minimum=True, maximum=1.0),
     **periodic.PARAMETERS,
     # 20 iterates: from the linear start, tuned at 3.3P with 1.5 times the fuselage stiffness
-    # the extrapolation needs 18 (window 12: 21.75 revolutions instead of 10.25 at stop 31; at
-    # 2.8P 12.75 instead of 10.25); the Table 1 cases restart after 8-9, before the window fills
+    # the extrapolation needs 18 (with a window of 12 the case takes 21.75 revolutions instead
+    # of 10.25; at 2.8P 12.75); the Table 1 cases restart after 8-9, before the window fills
     **periodic.shooting_parameters(window=20),
 }
 
@@ -475,10 +475,10 @@ def run(params: dict[str, Any]) -> xr.Dataset:
         # the periodic response at the coarser step, from the recorded one's end state: its
         # harmonics against the recorded ones estimate the time-step error (Richardson). At
         # most six revolutions of iterates: without shooting's iterates (a run that marched),
-        # tuned to 2.8P the estimate needs 17 quarter revolutions (with 16 it stayed uncertain
-        # and the step's 0.63 % error was archived); with them, the slow modes known before the
-        # coarse iterates span them (at the coarse samples: every other step's), the 60 sweep
-        # cases stop after 4–7
+        # tuned to 2.8P the estimate needs 17 quarter revolutions (with 16 it stays uncertain
+        # and the step's 0.63 % error is archived); with them, the slow modes known before the
+        # coarse iterates span them (at the coarse samples: every other step's), the cases of
+        # a 60-case sweep stop after 4–7
         coarse = integrator(n_c)
         coarse.restore(integ.state())
         runs.append((coarse, n_c))

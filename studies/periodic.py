@@ -478,10 +478,10 @@ def shoot(integ, sample: Callable[[], Array], signals: Callable[[Array], Array],
         # restart leaves to the periodicity test, above): after a restart that hit, its pairs
         # describe the noise and the last percent of the transient, not the slow modes. On the
         # hub tuned to 3.19P with 1.25 times the fuselage stiffness, restarted to 6e-6, the
-        # estimate at 2h took 17 iterates with them, 4 without; over issue 14's sweep from the
-        # nonlinear start, at most 7.25 revolutions a case against 8.0 with those changing by
-        # more than a tenth of the tolerance kept, the harmonics' largest error 2.2e-3
-        # against 1.9e-3
+        # estimate at 2h takes 17 iterates with them, 4 without; over a 60-case sweep
+        # (tuning 2.7–3.3P, 0.5–1.5 times the fuselage stiffness) from the nonlinear start, at
+        # most 7.25 revolutions a case against 8.0 with those changing by more than a tenth of
+        # the tolerance kept, the harmonics' largest error 2.2e-3 against 1.9e-3
         for i in range(1, len(seen)):
             scale = observed_scale(seen[i])
             live = scale > 0
@@ -512,10 +512,11 @@ def shoot(integ, sample: Callable[[], Array], signals: Callable[[Array], Array],
             # a start within the tolerance of the periodic response (the reduced model's,
             # studies.reduced_hub) the change between revolutions shows only the decay of the
             # start's error, (1 − ρ) of it with ρ the slow modes' ratio per revolution (0.6–0.85
-            # with the pins' 1 % damping), not the error itself: issue 14's sweep passed the
-            # test without a restart in 27 of 60 cases, their harmonics up to 0.61 % from the
-            # periodic ones (0.15 % at most once restarted). Unless the changes have settled
-            # below the restart level or a whole window went by without a usable estimate.
+            # with the pins' 1 % damping), not the error itself: without this wait a 60-case
+            # sweep passes the test without a restart in 27 of 60 cases, their harmonics up to
+            # 0.61 % from the periodic ones (0.15 % at most once restarted). Unless the changes
+            # have settled below the restart level or a whole window went by without a usable
+            # estimate.
             early = (restarts == 0 < max_restarts and window >= 2
                      and not (settled or filled))
             ok = change <= tolerance and len(blocks) >= revolutions * n_sec and not early

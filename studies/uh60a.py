@@ -60,8 +60,7 @@ class UH60AData:
     """Global UH-60A rotor data (SI), with their public sources.
 
     GenHel = ``terragord7/J-GenHel`` ``H60_constants.jl`` after Howlett (NASA CR-166309, 1981);
-    deck = the Dymore deck above; cross-checked against mscsim and SSCMTSVT (see
-    ``../shared/notes/uh60_aero.md`` §1.1 for the comparison).
+    deck = the Dymore deck above; cross-checked against mscsim and SSCMTSVT.
     """
 
     n_blades: int = 4  # 1; all sources
@@ -104,7 +103,7 @@ UH60A = UH60AData()
 # whose non-rotating frequency is set by the large lag stiffness, while the flap columns rise by
 # 10 Hz and more; (iii) an uncoupled hinged-beam model of this blade puts lag 2 at 20.6 Hz and
 # flap 4 at 33.9 Hz at Ω_ref, against 20.98 Hz for "f4" and 33.80 Hz for the last column "f5"
-# (../shared/notes/next_wave.md §2.2 and tests/test_uh60a.py).
+# (tests/studies/test_uh60a.py).
 MODE_LABEL: dict[str, str] = {"l1": "lag 1", "f1": "flap 1", "f2": "flap 2", "f3": "flap 3",
                               "f4": "lag 2", "t1": "torsion 1", "f5": "flap 4"}
 
