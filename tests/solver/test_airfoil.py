@@ -1,8 +1,9 @@
 """Peters finite-state airfoil constants and the classical references (solver.airfoil).
 
 References used here (none of them calls the code under test):
-* the matrices, tables and sample values of shared/notes/next_wave.md §3 (N = 2 and 4
-  constants, Theodorsen F and G, the max |C_N − C| table, the Wagner/Jones/Peters step table);
+* published values quoted to their printed digits (Peters, Karunamoorthy & Cao 1995;
+  Theodorsen 1935; Jones 1938): the N = 2 and 4 constants, Theodorsen's F and G, the max
+  |C_N − C| table, the Wagner/Jones/Peters step table (the ``*_NOTES`` arrays);
 * the constants rebuilt in exact rational arithmetic (``fractions``) from the formulas, with
   exact linear solves and an exact Routh–Hurwitz count for stability;
 * Theodorsen's function in the classical real form with J and Y Bessel functions, its small-k
@@ -41,7 +42,7 @@ from solver.airfoil import (
 )
 
 EULER_GAMMA = 0.5772156649015329
-K_GRID = np.geomspace(0.01, 2.0, 4001)  # the notes' range k ∈ [0.01, 2]
+K_GRID = np.geomspace(0.01, 2.0, 4001)  # the tabulated range k ∈ [0.01, 2]
 
 
 # ------------------------------------------------------------------------------------------
@@ -288,7 +289,7 @@ MEASURED_ERROR = {2: 0.144310, 4: 0.034481, 6: 0.015831, 8: 0.009652, 10: 0.0085
 
 @pytest.mark.parametrize("n", [2, 4, 6, 8, 10])
 def test_lift_deficiency_convergence_table(n):
-    """The notes' values are truncated to 2 significant digits (0.015 for 0.0158), and at
+    """The tabulated values are truncated to 2 significant digits (0.015 for 0.0158), and at
     N = 10 are 4 % low (0.0082 for 0.00853, a value confirmed with mpmath at 50 digits), hence
     6 % against them; against the measured maxima the tolerance is the grid's, 1e-4."""
     err = np.abs(lift_deficiency(K_GRID, n) - theodorsen(K_GRID)).max()
@@ -305,7 +306,7 @@ def test_lift_deficiency_converges_with_even_n_up_to_the_limit():
 
 
 def test_lift_deficiency_matches_test_side_evaluation_and_c8_samples():
-    """C_8 at k = 0.1, 0.5, 1 as quoted in the notes (4 decimals → 5e-5), and the batched
+    """C_8 at k = 0.1, 0.5, 1 as tabulated (4 decimals → 5e-5), and the batched
     solve against a plain per-k solve (measured 2.3e-13)."""
     k = np.array([0.1, 0.5, 1.0])
     C8 = lift_deficiency(k, 8)
@@ -322,7 +323,7 @@ def test_beyond_the_supported_range_the_model_diverges():
     """N = 12 (float from the exact entries; cond(A) = 2e9 leaves ~1e-7): error 0.0316, 3.7
     times N = 10's. N = 16: the exact characteristic polynomial has two roots of A in the left
     half-plane, so λ̇ = −(u/b)A⁻¹λ grows, and the sampled |C_N − C| is a resonance peak (> 1
-    on this grid; the notes' 1.8 is one sample of it), while N = 10 is stable."""
+    on this grid; the tabulated 1.8 is one sample of it), while N = 10 is stable."""
     A, b, c = (np.array(x, dtype=float) for x in _exact_constants(12))
     err12 = np.abs(_deficiency_from(A, b, c, K_GRID[::4]) - theodorsen(K_GRID[::4])).max()
     assert err12 == pytest.approx(MEASURED_ERROR[12], rel=1e-3)
@@ -390,7 +391,7 @@ def test_wagner_large_time_and_small_time():
 def test_wagner_against_jones_approximation():
     """R. T. Jones' 1 − 0.165e^(−0.0455s) − 0.335e^(−0.3s): its two exponentials cannot follow
     the 1/s tail; measured max deviation 0.0096 at s ≈ 82 over s ∈ [0, 1000], 0.0064 over
-    s ≤ 20. The formula here reproduces the notes' Jones row to its 4 decimals."""
+    s ≤ 20. The formula here reproduces the tabulated Jones row to its 4 decimals."""
     np.testing.assert_allclose(_jones(S_TABLE), JONES_NOTES, rtol=0.0, atol=5e-5)
     s = np.concatenate([np.linspace(0.0, 20.0, 11), np.geomspace(30.0, 1000.0, 12), [82.0]])
     dev = np.abs(wagner(s) - _jones(s))
@@ -399,7 +400,7 @@ def test_wagner_against_jones_approximation():
 
 
 def test_peters_step_response_table():
-    """N = 8 row of the notes (6e-5: φ_8(10) = 0.876548 is printed 0.8766) and the mpmath
+    """N = 8 row of the step table (6e-5: φ_8(10) = 0.876548 is printed 0.8766) and the mpmath
     values (5e-9: measured 2.8e-10 at s = 10 and 2.2e-9 at s = 20, the double-precision limit of
     A⁻¹ and its exponential with cond(A) = 1.2e6 at N = 8)."""
     phi8 = peters_step_response(S_TABLE, 8)

@@ -1,7 +1,7 @@
 """Geometrically exact beams against closed forms and published benchmark numbers.
 
-Reference numbers: ``../shared/notes/next_wave.md`` §1.3 (Kynema / BeamDyn regression values,
-Bathe & Bolourchi 1979) and exact solutions (roll-up circle, Euler–Bernoulli cantilever).
+Reference numbers: the Kynema / BeamDyn regression values, Bathe & Bolourchi (1979), and exact
+solutions (roll-up circle, Euler–Bernoulli cantilever).
 """
 
 from __future__ import annotations

@@ -89,7 +89,7 @@ def test_peters_he_lowest_member_closed_form(x):
     np.testing.assert_allclose(ls, [[0.625 * (1 + x * x)]], rtol=1e-15)
     np.testing.assert_allclose(k, np.diag([2 / math.pi, 4 / (3 * math.pi), 4 / (3 * math.pi)]),
                                rtol=1e-15)
-    # the notes' 4-digit values (π/√10 = 0.99346 is truncated to 0.9934 there)
+    # the 4-digit tabulated values (π/√10 = 0.99346 is truncated to 0.9934 there)
     np.testing.assert_allclose([-g, 2 * g], [-0.4967, 0.9934], atol=1e-4)
     np.testing.assert_allclose(np.diag(k), [0.6366, 0.4244, 0.4244], atol=5e-5)
 
@@ -271,9 +271,9 @@ def test_pitt_peters_forward_flight_is_glauert_with_skew_gradient():
     assert math.degrees(fl.chi) == pytest.approx(83.3, abs=0.05)
     x = math.tan(fl.chi / 2)
     assert fl.skew == pytest.approx(x, rel=1e-14)
-    assert x == pytest.approx(0.889, abs=1e-3)  # Coleman's k_x in the notes' table
+    assert x == pytest.approx(0.889, abs=1e-3)  # Coleman's k_x
     assert lam[2] / lam[0] == pytest.approx(15 * math.pi / 32 * x, rel=1e-12)
-    assert lam[2] / lam[0] == pytest.approx(1.309, abs=1e-3)  # the notes' k_x
+    assert lam[2] / lam[0] == pytest.approx(1.309, abs=1e-3)  # Pitt–Peters' k_x
     assert lam[2] > 0 and lam[1] == 0.0  # more inflow at the rear (ψ = 0, +x)
     gr = e.gradients(lam)
     assert gr == (lam[0], lam[1], lam[2])

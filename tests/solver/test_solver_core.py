@@ -672,7 +672,7 @@ def test_rotational_spring_beyond_half_a_turn():
     sim = simulate(mod, 2.6 * t_ref, t_ref / 400, scheme="ep", reactions=False)
     assert sim.converged, sim.message
     phi = sim.dataset.joint_angle.values[:, 0]
-    # before the spring unwrapped φ, it ran away to 46 rad
+    # φ is unwrapped beyond half a turn (wrapped, the spring's angle would run away)
     assert abs(phi.max() - w0 / omega) <= 1e-3
     roots = zero_crossings(sim.dataset.time.values,
                             sim.dataset.angular_velocity.values[:, 0, 2], 0.25 * t_ref)

@@ -68,7 +68,7 @@ def expected_period(curve, theta0_deg, inertia):
 
 
 def check_run(ds, curve, theta0, inertia, period_tol=1e-5):
-    """The issue's acceptance checks on one run; returns the measured numbers."""
+    """The acceptance checks on one run (period within 1e-5); returns the measured numbers."""
     assert ds.attrs["converged"] == 1, ds.attrs["message"]
     t_ref = expected_period(curve, theta0, inertia)
     # the study's analytic period is the closed form (to the ODE's 1e-11 for case 2 cycloid)
@@ -95,7 +95,7 @@ def check_run(ds, curve, theta0, inertia, period_tol=1e-5):
 #  circle  10° case 2: 3.33e-6 / 2.1e-13 / 1.5e-15  circle  80° case 2: 5.67e-6 / 4.6e-13 / 1.9e-15
 #  cycloid 40° case 2: 3.92e-6 / 3.4e-14 / 1.1e-15  cycloid 80° case 2: 7.0e-7 / 2.4e-12 / 8.9e-16
 # Full grid 10°–80°: period errors 3.3e-6 to 6.0e-6. The period error is the EP phase error
-# (ωh)²/12 = 3.3e-6 at 1000 steps, growing with the amplitude; the 1e-5 limit is the issue's.
+# (ωh)²/12 = 3.3e-6 at 1000 steps, growing with the amplitude, within the 1e-5 limit.
 # The energy change grows with θ0 on the cycloid (4.2e-11 at 80°, case 1): a 2.4× margin.
 SUBSET = [("circle", 10.0), ("circle", 80.0), ("cycloid", 40.0), ("cycloid", 80.0)]
 
@@ -256,7 +256,7 @@ def test_parameters_validated_before_run():
 @pytest.mark.slow
 def test_cli_collar_figures(tmp_path):
     """Figs. 11 and 12 (32 simulations on 2 workers): PNG, PDF and the netCDF table, whose
-    relative errors must meet the issue's 1e-5 everywhere."""
+    relative errors must be within 1e-5 everywhere."""
     res = CliRunner().invoke(main, ["collar", "--figures", str(tmp_path)])
     assert res.exit_code == 0, res.output
     for name in ("collar_case1.png", "collar_case1.pdf", "collar_case2.png",

@@ -147,7 +147,7 @@ def _closed_form(ab: EquivalentAbsorber, omega: float, whirl: np.ndarray) -> np.
 
 
 def test_closed_form_is_the_notes_pendulum_formula():
-    """For a simple pendulum (B = m r, J = m r²) the closed form is the notes' (§5)
+    """For a simple pendulum (B = m r, J = m r²) the closed form is the classical
     N m [1 + ω²/(2(ñ²Ω² − (ω ∓ Ω)²))]; ``apparent_mass`` gives it too."""
     m, r, n, order, om = 14.6, 0.05, 4, 3.0, 27.0
     ab = EquivalentAbsorber(n, n * m, m * r * r, m * r, order)

@@ -29,7 +29,7 @@ def published(label: str) -> float:
 def test_fanplot_at_27_rad_s_against_bowen_davies(at_27, label, tol):
     """Measured relative differences at 27 rad/s (6 elements, converged to 0.2 % against 12):
     flap 1 −0.9 %, flap 2 −0.2 %, flap 3 −1.8 %, flap 4 +0.4 %, lag 2 −0.4 %, torsion 1
-    +0.6 %. Lag 1 is −4.7 %: the issue's arrangement has a free lag hinge, while the published
+    +0.6 %. Lag 1 is −4.7 %: this arrangement has a free lag hinge, while the published
     model has lag stiffness — its lag 1 is 0.28 Hz at Ω = 0 (checked below), ours 0."""
     f = at_27.frequency.sel(hub_speed=27.0).values[list(at_27.mode_label.values).index(label)]
     assert f == pytest.approx(published(label), rel=tol)

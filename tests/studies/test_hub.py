@@ -1,4 +1,4 @@
-"""The hub with four bifilars (issue: the overnight sweep), run as users run it.
+"""The hub with four bifilars, run as users run it (the overnight sweep).
 
 The paper's Table 1 (cases 0-3) goes through the real pipeline: a LocalCluster of 2 worker
 processes, one case file per case, the consolidated CF archive, the report plots. The physics
@@ -263,7 +263,7 @@ def test_default_run_stores_the_step_error_of_its_harmonics():
 
     own = run({"richardson": False})
     assert own.attrs["message"] == "" and own.attrs["estimate_samples_per_rev"] == 20
-    # issue 13: at most 8 revolutions per case, the coarser step's included (measured 6.5)
+    # at most 8 revolutions per case, the coarser step's included (measured 6.5)
     assert own.attrs["simulated_revolutions"] <= 8
     assert 1.0 <= own.attrs["estimate_revolutions"] <= 4.0 and own.attrs["richardson"] == 0
     coarse = run({"steps_per_rev": 20, "richardson": False, "error_estimate": False})
@@ -313,8 +313,8 @@ def _exact_error(given: dict):
 
 @pytest.mark.slow
 def test_default_step_gives_the_exact_harmonics_in_at_most_8_revolutions():
-    """Issue 13's accuracy and revolution goals against the exact equations' periodic
-    response.
+    """The default run's accuracy (0.5 % of each signal's largest harmonic) and revolutions
+    (at most 8) against the exact equations' periodic response.
 
     Free case: the step (Suzuki's composition of ep, 40 steps/rev) errs by 0.19 % of each
     signal's largest harmonic (the plain ep at 160 steps/rev: 3.3 %) after 6.5 revolutions
@@ -322,7 +322,7 @@ def test_default_step_gives_the_exact_harmonics_in_at_most_8_revolutions():
     stored estimate is that error within 25 % (measured 1.71e-3 against 1.92e-3), and the
     default's extrapolated harmonics err by 2.3e-4. The composed step is of order 4 on the
     harmonics: 24 → 48 steps/rev take the error from 1.4e-2 to 9.4e-4 (log2 ratio 3.88).
-    Tuned to 3.3P with 1.5 times the fuselage stiffness (a corner of issue 14's sweep, its
+    Tuned to 3.3P with 1.5 times the fuselage stiffness (a corner of the 60-case sweep, its
     largest swing, 24°) the step errs by 0.90 %, which the estimate flags (8.0e-3), and the
     default's extrapolated harmonics by 0.12 %, after 7.25 revolutions in all (6.25 and 1.0)."""
     from studies.hub import run
@@ -346,14 +346,13 @@ def test_default_step_gives_the_exact_harmonics_in_at_most_8_revolutions():
 
 
 @pytest.mark.slow
-def test_issue14_sweep_takes_at_most_8_revolutions_per_case_at_the_exact_harmonics():
-    """Issue 13's "at most 8 revolutions per hub case, recorded ones included" over issue
-    14's 60-case sweep (tuning 2.7–3.3P in 12 steps, 0.5–1.5 times the fuselage stiffness,
-    swings 2–24°, the fuselage mode at the 4P tone at 1.25 times), with the default run's
-    accuracy against the exact equations' periodic response. Measured: 6.4 revolutions on
+def test_sixty_case_sweep_takes_at_most_8_revolutions_per_case_at_the_exact_harmonics():
+    """At most 8 revolutions per hub case, recorded ones included, over a 60-case sweep
+    (tuning 2.7–3.3P in 12 steps, 0.5–1.5 times the fuselage stiffness, swings 2–24°, the
+    fuselage mode at the 4P tone at 1.25 times), with the default run's accuracy against the
+    exact equations' periodic response. Measured: 6.4 revolutions on
     average, at most 7.25; every case restarts once or twice; the extrapolated harmonics
-    within 2.2e-3 of the exact ones (median 4.1e-4; issue 13 asks for
-    5e-3)."""
+    within 2.2e-3 of the exact ones (median 4.1e-4; the goal is 5e-3)."""
     from studies.hub import run
 
     worst = {}

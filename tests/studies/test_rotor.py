@@ -127,7 +127,7 @@ def test_forward_flight_thrust_and_glauert_inflow():
     lam_i = math.sqrt(ct / 2)
     for _ in range(100):
         lam_i = ct / (2 * math.hypot(mu, lam_f + lam_i))
-    # measured: C_T/σ = 0.110 (the notes' blade-element estimate 0.107), λ0 3.5 % above Glauert
+    # measured: C_T/σ = 0.110 (a blade-element estimate gives 0.107), λ0 3.5 % above Glauert
     # (the Peters–He mean of a non-uniform, forward-flight loading is not Glauert's uniform
     # value)
     assert 0.05 < ct / UH60A.solidity < 0.13

@@ -207,8 +207,8 @@ def test_rotor_quarter_turn_keeps_every_constraint():
     # the rotor's sectors are blade j's beam, hinge links and lifting-line states and bifilar j;
     # the hub turns about the shaft head's axis (which tilts with the fuselage-beam). A state
     # a quarter revolution on, mapped back, satisfies every constraint at the earlier time
-    # (measured: 2.4e-13, the integrator's own level; before the hinge links were built in
-    # frames turned with their blade, the flap hinges' axis rows were violated by 1.0)
+    # (measured: 2.4e-13, the integrator's own level: the hinge links are built in frames
+    # turned with their blade, so the quarter turn maps one blade's parts onto the next's)
     from studies import rotor
 
     p = rotor.SPEC.complete({})
