@@ -48,6 +48,7 @@ from __future__ import annotations
 import contextlib
 import importlib.metadata
 import os
+import socket
 import tempfile
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -82,6 +83,9 @@ STATUS_FAILED = 1
 STATUS_NOT_RUN = 2
 FLAG_VALUES = np.array([STATUS_OK, STATUS_FAILED, STATUS_NOT_RUN], dtype=np.int8)
 FLAG_MEANINGS = "ok failed not_run"
+
+# The writing host in the names of temporary files (dots would split the name's fields).
+_WRITER = socket.gethostname().replace(".", "_") or "host"
 
 # netCDF compression of float variables: level 4 is most of zlib's gain at a fraction of level 9's
 # time.
@@ -385,9 +389,17 @@ def _write_atomic(ds: xr.Dataset, path: Path, encoding: Mapping[str, Any]) -> Pa
     path.parent.mkdir(parents=True, exist_ok=True)
     ds, text = cf_encode(ds)
     encoding = {**text, **{k: v for k, v in encoding.items() if k in ds.variables}}
+    # A writer killed mid-write (kill -9, a batch system's limit) leaves its temporary: remove
+    # those of this target whose writer no longer runs, before writing a new one.
+    for stale in stale_temporaries(path.parent, path.stem):
+        with contextlib.suppress(OSError):
+            stale.unlink()
     # Same directory as the target, so that os.replace is an atomic rename on one filesystem.
     # The name does not end in .nc: a leftover from a killed writer is never taken for a case.
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=".tmp")
+    # It names the writer's host and process, so that a later writer can tell a leftover from
+    # the temporary of a writer still at work.
+    fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".tmp",
+                               prefix=f".{path.stem}.{_WRITER}.{os.getpid()}.")
     os.close(fd)
     try:
         os.chmod(tmp, 0o666 & ~_umask())
@@ -436,9 +448,40 @@ def read_case(path: str | os.PathLike[str]) -> xr.Dataset:
         ) from exc
 
 
-def stale_temporaries(directory: Path, stem: str) -> list[Path]:
-    """Temporary files a killed writer of ``<stem>.nc`` may have left in ``directory``."""
-    return sorted(Path(directory).glob(f".{stem}.*.tmp"))
+def _writer_alive(name: str, stem: str) -> bool:
+    """Whether the writer that made the temporary file ``name`` may still be writing it."""
+    fields = name[len(stem) + 2: -len(".tmp")].split(".")
+    if len(fields) < 3 or not fields[1].isdigit():
+        return False  # not named after its writer: a leftover
+    host, pid = fields[0], int(fields[1])
+    if host != _WRITER:
+        return True  # another machine's writer (a worker on a shared file system): unknown
+    if pid == os.getpid():
+        return False  # this process writes one file at a time: its own are leftovers
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def stale_temporaries(directory: Path, stem: str, *, all_writers: bool = False) -> list[Path]:
+    """Temporary files a killed writer of ``<stem>.nc`` left in ``directory``.
+
+    Parameters
+    ----------
+    directory, stem
+        Where the target ``<stem>.nc`` is written.
+    all_writers
+        Also those of writers that may still run: another host's, or a live process's (for
+        a sweep that holds the output directory's lock and is about to write the target).
+    """
+    found = sorted(Path(directory).glob(f".{stem}.*.tmp"))
+    if all_writers:
+        return found
+    return [p for p in found if not _writer_alive(p.name, stem)]
 
 
 @dataclass(frozen=True)

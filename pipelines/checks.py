@@ -1,6 +1,6 @@
-"""Checks of the command-line inputs that are not model parameters: output paths and the
-scheduler address. Each raises :class:`InputError` with one line naming the option and the value,
-before any work starts.
+"""Checks of the command-line inputs that are not model parameters: output paths, the number of
+workers and the scheduler address. Each raises :class:`InputError` with one line naming the
+option and the value, before any work starts.
 """
 
 from __future__ import annotations
@@ -16,8 +16,44 @@ SCHEDULER_SCHEMES = ("tcp", "tls", "ws", "wss", "ucx", "inproc")
 _HOST = re.compile(r"^(\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9]([A-Za-z0-9.\-_]*[A-Za-z0-9])?)$")
 
 
+# Most worker processes a local cluster may start: four per CPU core. The solver holds a core
+# per worker, so more workers than cores only share them; far more (``--workers 100000``)
+# exhaust the machine's memory and process table while the cluster starts.
+WORKERS_PER_CORE = 4
+
+
 class InputError(ValueError):
     """A command-line input (path, address) is unusable; the message names it."""
+
+
+def max_workers() -> int:
+    """The most worker processes a local cluster may start on this machine."""
+    return WORKERS_PER_CORE * (os.cpu_count() or 1)
+
+
+def check_workers(workers: int) -> int:
+    """Check a number of local worker processes: 1 to :func:`max_workers`.
+
+    Raises
+    ------
+    InputError
+        If ``workers`` is below 1 or above the limit.
+    """
+    limit = max_workers()
+    if not 1 <= workers <= limit:
+        raise InputError(
+            f"--workers {workers}: outside the valid range [1, {limit}] ({WORKERS_PER_CORE} per "
+            f"CPU core, {os.cpu_count() or 1} cores here; for more workers start them on other "
+            "machines and give --scheduler)"
+        )
+    return workers
+
+
+def check_not_empty(path: str | os.PathLike[str], option: str = "--out") -> None:
+    """Refuse an empty path: it would silently mean the current directory."""
+    if not os.fspath(path).strip():
+        raise InputError(f"{option} {os.fspath(path)!r}: an empty path; give a directory or "
+                         "file name (use . for the current directory)")
 
 
 def _existing_ancestor(path: Path, option: str, shown: Path) -> Path:
@@ -66,6 +102,7 @@ def check_output_dir(path: str | os.PathLike[str], option: str = "--out") -> Pat
         If ``path`` or one of its parents is a file, or the directory cannot be created or
         written.
     """
+    check_not_empty(path, option)
     shown = Path(path)
     path = Path(os.path.abspath(path))
     if path.exists() and not path.is_dir():
@@ -89,6 +126,7 @@ def check_output_file(path: str | os.PathLike[str], option: str = "--out") -> Pa
         If ``path`` is a directory, a parent is a file, or its directory cannot be created or
         written.
     """
+    check_not_empty(path, option)
     shown = Path(path)
     path = Path(os.path.abspath(path))
     if path.is_dir():
@@ -140,3 +178,21 @@ def check_scheduler_address(address: str) -> str:
         raise InputError(f"--scheduler {address!r}: port {port!r} is not a number in "
                          f"1-65535; {hint}")
     return address
+
+
+def check_target_file(path: str | os.PathLike[str], option: str = "--out") -> Path:
+    """Make sure an output file inside a checked directory can be replaced: it is absent or a
+    regular file (not a directory or a device, which the final rename would fail on after
+    all the work).
+
+    Raises
+    ------
+    InputError
+        If ``path`` exists and is not a regular file.
+    """
+    path = Path(path)
+    if path.exists() and not path.is_file():
+        kind = "a directory" if path.is_dir() else "not a regular file"
+        raise InputError(f"{option} {path.parent}: {path} is {kind}; the sweep writes its "
+                         "archive there: move it away or choose another --out")
+    return path

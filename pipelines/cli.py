@@ -30,8 +30,15 @@ from typing import Any, NoReturn
 import click
 
 from pipelines.archive import ArchiveError, code_version, open_archive, status_counts
-from pipelines.checks import InputError, check_output_dir, check_scheduler_address
+from pipelines.checks import (
+    InputError,
+    check_output_dir,
+    check_scheduler_address,
+    check_workers,
+    max_workers,
+)
 from pipelines.fanplot_command import fanplot
+from pipelines.options import OutPath
 from pipelines.study_commands import collar, pendulum
 from pipelines.sweep import CASES_DIR, StudyError, SweepError, run_sweep
 from studies.parameters import ParameterError
@@ -116,8 +123,10 @@ def _check_cluster(workers: int | None, scheduler: str | None) -> None:
     if workers is not None and scheduler is not None:
         _fail("--workers and --scheduler are mutually exclusive: --workers starts a local "
               "cluster, --scheduler uses a running one")
-    if scheduler is not None:
-        with _user_errors():
+    with _user_errors():
+        if workers is not None:
+            check_workers(workers)
+        if scheduler is not None:
             check_scheduler_address(scheduler)
 
 
@@ -136,11 +145,18 @@ def _cluster_args(workers: int | None, scheduler: str | None) -> list[str]:
 
 workers_option = click.option(
     "--workers", type=click.IntRange(min=1), default=None, metavar="N",
-    help="Worker processes of a new local dask cluster (default 2).",
+    help=f"Worker processes of a new local dask cluster (default 2; at most {max_workers()}, "
+         "4 per CPU core).",
 )
 scheduler_option = click.option(
     "--scheduler", default=None, metavar="ADDRESS",
     help="Address of a running dask scheduler, e.g. tcp://host:8786 (exclusive with --workers).",
+)
+worker_timeout_option = click.option(
+    "--worker-timeout", type=click.FloatRange(min=0, min_open=True), default=None,
+    metavar="SECONDS",
+    help="How long to wait for the first worker of a --scheduler that has none, saying so "
+         "on stderr; then exit 2 without running anything (default 600).",
 )
 
 
@@ -178,15 +194,17 @@ def main() -> None:
 
 @main.command()
 @click.argument("study", type=click.Path(dir_okay=False, path_type=Path))
-@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False, path_type=Path),
-              help="Output directory: cases/ and archive.nc.")
+@click.option("--out", "out_dir", required=True, type=OutPath(file_okay=False, path_type=Path),
+              help="Output directory: cases/, archive.nc and the lock file sweep.lock.")
 @workers_option
 @scheduler_option
+@worker_timeout_option
 @click.option("--retry-failed", is_flag=True, help="Recompute cases recorded as failed.")
 @click.option("--quiet", is_flag=True, help="No progress lines.")
 @click.pass_context
 def sweep(ctx: click.Context, study: Path, out_dir: Path, workers: int | None,
-          scheduler: str | None, retry_failed: bool, quiet: bool) -> None:
+          scheduler: str | None, worker_timeout: float | None, retry_failed: bool,
+          quiet: bool) -> None:
     """Run every case of STUDY (a TOML study file) and write DIR/archive.nc.
 
     The study's model is a registry name (model = "hub") or a plug-in given as
@@ -200,7 +218,8 @@ def sweep(ctx: click.Context, study: Path, out_dir: Path, workers: int | None,
                             *(["--retry-failed"] if retry_failed else []))
     with _user_errors(), _terminate_as_interrupt():
         archive = run_sweep(study, out_dir, workers=workers, scheduler=scheduler,
-                            progress=not quiet, retry_failed=retry_failed, command=command)
+                            progress=not quiet, retry_failed=retry_failed, command=command,
+                            worker_timeout=worker_timeout)
         _, not_ok = _not_ok(archive)
     click.echo(str(archive))
     _exit_if_not_ok(not_ok)
@@ -208,7 +227,7 @@ def sweep(ctx: click.Context, study: Path, out_dir: Path, workers: int | None,
 
 @main.command()
 @click.argument("archive", type=click.Path(dir_okay=False, path_type=Path))
-@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False, path_type=Path),
+@click.option("--out", "out_dir", required=True, type=OutPath(file_okay=False, path_type=Path),
               help="Directory for the figures.")
 @click.option("--format", "formats", multiple=True, type=click.Choice(["png", "pdf", "svg"]),
               default=("png", "pdf"), show_default=True, help="File format (repeatable).")
@@ -229,7 +248,7 @@ def plot(archive: Path, out_dir: Path, formats: tuple[str, ...]) -> None:
 
 @main.command()
 @click.option("--out", "out_dir", default=Path("results"), show_default=True,
-              type=click.Path(file_okay=False, path_type=Path),
+              type=OutPath(file_okay=False, path_type=Path),
               help="Output directory: cases/, archive.nc and plots/.")
 @click.option("--model", "model", default="rotor", show_default=True,
               type=click.Choice(sorted(BUILT_IN_STUDIES)),
@@ -239,9 +258,10 @@ def plot(archive: Path, out_dir: Path, formats: tuple[str, ...]) -> None:
                    "with assumed 3P/5P blade shears (under a minute).")
 @workers_option
 @scheduler_option
+@worker_timeout_option
 @click.pass_context
 def run(ctx: click.Context, out_dir: Path, model: str, workers: int | None,
-        scheduler: str | None) -> None:
+        scheduler: str | None, worker_timeout: float | None) -> None:
     """Run the built-in study (the paper's Table 1, cases 0-3, and the linear equivalent of
     case 1) on the rotor (default) or the hub model, and plot it into DIR/plots.
 
@@ -258,7 +278,7 @@ def run(ctx: click.Context, out_dir: Path, model: str, workers: int | None,
     with _user_errors(), _terminate_as_interrupt(), \
             resources.as_file(default_study(model)) as study:
         archive = run_sweep(study, out_dir, workers=workers, scheduler=scheduler,
-                            command=command)
+                            command=command, worker_timeout=worker_timeout)
         counts, not_ok = _not_ok(archive)
         paths = plot_archive(archive, out_dir / "plots") if counts["ok"] else []
     click.echo(str(archive))

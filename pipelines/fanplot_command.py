@@ -18,6 +18,7 @@ import numpy as np
 import xarray as xr
 
 from pipelines.archive import CONVENTIONS
+from pipelines.options import OutPath
 from pipelines.study_commands import _fail, _finish, _writable, _write
 from studies.bifilar import HARDWARE
 from studies.uh60a import UH60A, bowen_davies_fanplot
@@ -85,7 +86,7 @@ class _SpeedList(click.ParamType):
               help="cubic beam elements from the hinge to the tip")
 @click.option("--tuning-order", default=HARDWARE["tuning_order"].default, show_default=True,
               type=click.FloatRange(0.5, 10.0), help="bifilar tuning order drawn as a line")
-@click.option("--out", required=True, type=click.Path(dir_okay=False, path_type=Path),
+@click.option("--out", required=True, type=OutPath(dir_okay=False, path_type=Path),
               help="netCDF file; the figure is written beside it (.png, .pdf)")
 def fanplot(speeds: tuple[float, ...], more_speeds: tuple[float, ...], elements: int,
             tuning_order: float, out: Path) -> None:

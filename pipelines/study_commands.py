@@ -20,6 +20,7 @@ import xarray as xr
 
 from pipelines.archive import CONVENTIONS
 from pipelines.checks import InputError, check_output_dir, check_output_file
+from pipelines.options import OutPath
 from studies import bifilar as pendulum_study
 from studies import collar as collar_study
 from studies.parameters import Param, ParameterError
@@ -33,8 +34,9 @@ def option_help(param: Param, note: str = "") -> str:
         text = f"{param.long_name}: {param.describe_range()}"
     else:
         valid = param.describe_range().removesuffix(f" {param.units}")
-        units = "" if param.units == "1" else f" ({param.units})"
-        text = f"{param.long_name}{units}; valid {valid}"
+        valid = valid.removesuffix(" (dimensionless)")
+        units = "dimensionless" if param.units == "1" else param.units
+        text = f"{param.long_name} ({units}); valid {valid}"
     return f"{text}; {note}" if note else text
 
 
@@ -60,8 +62,11 @@ def param_options(parameters: Mapping[str, Param], *, no_default: Collection[str
     def decorate(fn: Any) -> Any:
         for name, param in reversed(list(parameters.items())):
             given = name not in no_default
+            # a string parameter with choices lists them in --help and refuses others
+            kind = (click.Choice(param.choices) if param.choices is not None
+                    else _CLICK_TYPES[param.kind])
             fn = click.option(
-                "--" + name.replace("_", "-"), name, type=_CLICK_TYPES[param.kind],
+                "--" + name.replace("_", "-"), name, type=kind,
                 default=param.default if given else None, show_default=given,
                 help=option_help(param, notes.get(name, "")),
             )(fn)
@@ -195,9 +200,9 @@ def collar_figures(out_dir: Path, steps_per_period: int = 1000, workers: int = 2
 @param_options(collar_study.PARAMETERS, no_default=("curve", "theta0"),
                notes={"curve": "required unless --figures",
                       "theta0": "required unless --figures"})
-@click.option("--out", type=click.Path(dir_okay=False, path_type=Path),
+@click.option("--out", type=OutPath(dir_okay=False, path_type=Path),
               help="netCDF file for the time histories")
-@click.option("--figures", type=click.Path(file_okay=False, path_type=Path),
+@click.option("--figures", type=OutPath(file_okay=False, path_type=Path),
               help="reproduce Figs. 11 and 12 into this directory instead")
 def collar(out: Path | None, figures: Path | None, **params: Any) -> None:
     """The paper's validation: a collar sliding on a circle or a cycloid (Figs. 10-12)."""
@@ -270,8 +275,8 @@ def pendulum_figures(out_dir: Path, base: dict[str, Any], workers: int = 2) -> l
                notes={"hole_diameter": "exclusive with --tuning-order",
                       "tuning_order": "default 3",
                       "amplitude": "required unless --figures"})
-@click.option("--out", type=click.Path(dir_okay=False, path_type=Path))
-@click.option("--figures", type=click.Path(file_okay=False, path_type=Path),
+@click.option("--out", type=OutPath(dir_okay=False, path_type=Path))
+@click.option("--figures", type=OutPath(file_okay=False, path_type=Path),
               help="draw frequency order against amplitude for the three hole shapes")
 def pendulum(out: Path | None, figures: Path | None, **params: Any) -> None:
     """One bifilar pendulum on a hub spinning at constant speed (Figs. 1, 5-7, Eq. 7)."""

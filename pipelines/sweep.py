@@ -55,7 +55,7 @@ import time
 import tomllib
 import traceback
 import uuid
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Collection, Iterator, Mapping
 from concurrent.futures import CancelledError
 from dataclasses import dataclass
 from pathlib import Path
@@ -78,7 +78,14 @@ from pipelines.archive import (
     stale_temporaries,
     write_case,
 )
-from pipelines.checks import check_output_dir, check_scheduler_address
+from pipelines.checks import (
+    InputError,
+    check_output_dir,
+    check_scheduler_address,
+    check_target_file,
+    check_workers,
+)
+from pipelines.lock import sweep_lock
 from studies.parameters import ModelSpec, Param, ParameterError
 from studies.progress import reporting
 from studies.registry import available, get_model
@@ -94,6 +101,12 @@ PROGRESS_TOPIC = "bifilar-progress"
 PROGRESS_INTERVAL = 10.0
 # Seconds to wait for a --scheduler to answer.
 CONNECT_TIMEOUT = 30
+# Seconds to wait for the first worker of a scheduler that has none (e.g. workers still queued
+# on a batch system); --worker-timeout overrides it.
+WORKER_TIMEOUT = 600.0
+# Wall-clock minutes numba takes to compile the solver's kernels into its cache on a first run
+# (the rotor model, most kernels; measured 1.5-2 minutes on a 2-core machine).
+COMPILE_MINUTES = 2
 # glibc's malloc thresholds of the local cluster's worker processes (bytes), set before they
 # start. Dask's default MALLOC_TRIM_THRESHOLD_ = 65536 returns freed memory to the system at
 # once, and setting any threshold also fixes the mmap threshold at 128 KiB: the solver's
@@ -107,6 +120,10 @@ WORKER_ENVIRON = {f"distributed.nanny.pre-spawn-environ.{k}": v
                   for k, v in MALLOC_ENVIRON.items()}
 
 TOP_LEVEL_KEYS = ("model", "title", "description", "fixed", "sweep", "cases")
+# Most cases one study may hold. The study is validated, and its archive consolidated, in
+# memory in the driver: 10^5 cases validate in seconds and their archive of a few scalars per
+# case is a few hundred megabytes; a larger study belongs in several files.
+MAX_CASES = 100_000
 
 
 class StudyError(ValueError):
@@ -293,6 +310,88 @@ class Study:
         return coords, constants
 
 
+class _Reads:
+    """A stand-in for a model's parameters that records which of them a cross-check reads.
+
+    Parameter names are recorded whether read as ``p.name`` or ``p["name"]``; any other
+    attribute (a method that may look at every parameter) counts as reading them all.
+    """
+
+    def __init__(self, target: Any, declared: Collection[str]) -> None:
+        self._target = target
+        self._declared = declared
+        self.names: set[str] | None = set()  # None: every parameter
+
+    def _note(self, name: Any) -> None:
+        if self.names is not None:
+            if name in self._declared:
+                self.names.add(name)
+            else:
+                self.names = None
+
+    def __getattr__(self, name: str) -> Any:
+        self._note(name)
+        return getattr(self._target, name)
+
+    def __getitem__(self, name: str) -> Any:
+        self._note(name)
+        return self._target[name]
+
+    def get(self, name: str, default: Any = None) -> Any:
+        self._note(name)
+        return self._target.get(name, default)
+
+    def __contains__(self, name: object) -> bool:
+        self._note(name)
+        return name in self._target
+
+    def __iter__(self) -> Iterator[str]:
+        self.names = None
+        return iter(self._target)
+
+
+class CrossChecks:
+    """The model's cross-checks (``ModelSpec.check``) over the cases of a study, each distinct
+    combination of the values they read checked once.
+
+    A cross-check is a function of the parameters it reads. Once it has passed for some
+    values of those, every case with the same values passes too: a sweep of 10^4 cases over
+    the fuselage stiffness and the rotor speed designs the bifilar holes once per speed, not
+    once per case. A check that fails raises at once, with the model's message.
+    """
+
+    def __init__(self, spec: ModelSpec) -> None:
+        self.spec = spec
+        self.calls = 0
+        # names read (sorted) -> the value combinations of those names that passed
+        self._passed: dict[tuple[str, ...], set[tuple[Any, ...]]] = {}
+
+    def _typed(self, params: Mapping[str, Any]) -> Any:
+        trusted = getattr(self.spec, "trusted", None)
+        return trusted(params) if trusted is not None else dict(params)
+
+    def __call__(self, params: Mapping[str, Any]) -> None:
+        """Raise :class:`ParameterError` if the model rejects the complete ``params``."""
+        if self.spec.check is None:
+            return
+        for names, passed in self._passed.items():
+            if tuple(params[n] for n in names) in passed:
+                return
+        self.calls += 1
+        target = self._typed(params)
+        reads = _Reads(target, self.spec.parameters)
+        try:
+            self.spec.check(reads)
+        except ParameterError:
+            raise
+        except Exception:
+            # The check needs the real object (e.g. it copies it): check that, remember nothing.
+            self.spec.check(target)
+            return
+        names = tuple(sorted(reads.names if reads.names is not None else params))
+        self._passed.setdefault(names, set()).add(tuple(params[n] for n in names))
+
+
 def _suggest(name: str, known: Mapping[str, Param]) -> str:
     close = difflib.get_close_matches(name, list(known), n=1)
     return f" (did you mean {close[0]!r}?)" if close else ""
@@ -389,11 +488,19 @@ def load_study(path: str | os.PathLike[str]) -> Study:
             + ("not both" if has_sweep else "found neither")
         )
 
+    # Every value was checked once where the file gives it (each swept value once, not once
+    # per case); per case only the model's cross-checks run, and those only for combinations
+    # of the values they read that have not passed already.
+    defaults = {name: param.default for name, param in spec.parameters.items()}
+    cross_check = CrossChecks(spec)
+
     def complete(label: str, given: dict[str, Any]) -> dict[str, Any]:
+        params = {**defaults, **given}
         try:
-            return spec.complete(given)
+            cross_check(params)
         except ParameterError as exc:
             raise StudyError(f"{src}: case {label}: {exc}") from exc
+        return params
 
     cases: list[Case] = []
     sweep: dict[str, list[Any]] = {}
@@ -416,6 +523,12 @@ def load_study(path: str | os.PathLike[str]) -> Study:
             sweep[name] = checked
         if not sweep:
             raise StudyError(f"{src}: [sweep] is empty; give at least one swept parameter")
+        size = math.prod(len(v) for v in sweep.values())
+        if size > MAX_CASES:
+            sizes = " x ".join(f"{len(v)} {name}" for name, v in sweep.items())
+            raise StudyError(f"{src} [sweep]: {sizes} make {size} cases, more than the "
+                             f"limit of {MAX_CASES} cases per study; split it into several "
+                             "study files (each with its own --out)")
         for index in itertools.product(*(range(len(v)) for v in sweep.values())):
             point = {name: sweep[name][i] for name, i in zip(sweep, index, strict=True)}
             label = ", ".join(f"{k}={_format_value(v)}" for k, v in point.items())
@@ -428,6 +541,9 @@ def load_study(path: str | os.PathLike[str]) -> Study:
             raise StudyError(f"{src}: cases must be a list of [[cases]] tables")
         if not entries:
             raise StudyError(f"{src}: cases = [] is an empty list; add [[cases]] tables")
+        if len(entries) > MAX_CASES:
+            raise StudyError(f"{src}: {len(entries)} [[cases]], more than the limit of "
+                             f"{MAX_CASES} cases per study; split it into several study files")
         names: set[str] = set()
         for i, entry in enumerate(entries):
             if not entry:
@@ -477,8 +593,8 @@ def _failure_case(case_id: str, model: str, params: Mapping[str, Any], message: 
 
 def _progress_listener(topic: str, case_id: str) -> Any:
     """A :func:`studies.progress.report` listener that forwards lines to the sweep's client as
-    dask events (at most one per :data:`PROGRESS_INTERVAL` seconds; the first always), or
-    ``None`` outside a dask worker."""
+    dask events (at most one per :data:`PROGRESS_INTERVAL` seconds; the first always, and
+    every line sent with ``urgent=True``), or ``None`` outside a dask worker."""
     try:
         from distributed import get_worker
 
@@ -487,18 +603,63 @@ def _progress_listener(topic: str, case_id: str) -> Any:
         return None
     last = -math.inf
 
-    def listen(message: str) -> None:
+    def listen(message: str, urgent: bool = False) -> None:
         nonlocal last
         now = time.monotonic()
-        if now - last >= PROGRESS_INTERVAL:
+        if urgent or now - last >= PROGRESS_INTERVAL:
             last = now
             worker.log_event(topic, {"case_id": case_id, "message": message})
 
     return listen
 
 
+@contextlib.contextmanager
+def compile_notice(say: Any) -> Iterator[None]:
+    """Say once that numba is compiling kernels, when it starts to (its cache is cold).
+
+    numba raises its ``numba:compile`` event only for a kernel it does not find in its cache
+    (``__pycache__`` beside the solver's modules), so the line appears on a first run, after
+    an upgrade, or in a fresh environment, and never when the kernels load from the cache.
+    """
+    try:
+        from numba.core import event
+    except ImportError:  # a plug-in model's environment without numba compiles nothing
+        yield
+        return
+    told = False
+
+    class Notice(event.Listener):
+        def on_start(self, ev: Any) -> None:
+            nonlocal told
+            if not told:
+                told = True
+                say(f"compiling kernels (first run, about {COMPILE_MINUTES} minutes; numba "
+                    "caches them for the next runs)...")
+
+        def on_end(self, ev: Any) -> None:
+            pass
+
+    with event.install_listener("numba:compile", Notice()):
+        yield
+
+
+def nan_outputs(summary: xr.Dataset) -> list[str]:
+    """The archived outputs of a case summary that hold NaN (a result the model could not
+    determine, e.g. a period from a record shorter than two periods)."""
+    return [name for name, var in summary.data_vars.items()
+            if var.dtype.kind == "f" and bool(np.isnan(var.values).any())]
+
+
+def _urgent(listener: Any, line: str) -> None:
+    try:
+        listener(line, urgent=True)
+    except TypeError:  # a plain callable of one line
+        listener(line)
+
+
 def run_case(model_name: str, params: Mapping[str, Any], case_file: str,
-             progress_topic: str | None = None) -> dict[str, Any]:
+             progress_topic: str | None = None,
+             progress: Callable[[str], None] | None = None) -> dict[str, Any]:
     """Run one case and write its case file atomically; the dask task of a sweep.
 
     Any exception of the model (or a result with ``attrs["status"] == "failed"`` or
@@ -517,6 +678,8 @@ def run_case(model_name: str, params: Mapping[str, Any], case_file: str,
         Path of the case file to write, ``<out>/cases/<case_id>.nc``.
     progress_topic
         Dask event topic to which the model's progress lines are sent (on a dask worker).
+    progress
+        Receives the progress lines instead, outside dask (the single-model commands).
 
     Returns
     -------
@@ -530,15 +693,19 @@ def run_case(model_name: str, params: Mapping[str, Any], case_file: str,
     summary = xr.Dataset()
     version = ""
     listener = _progress_listener(progress_topic, case_id) if progress_topic else None
+    if listener is None and progress is not None:
+        listener = progress
     try:
-        spec = resolve_model(model_name)
-        version = model_version(spec)
         if listener is not None:
             listener(f"started on {_worker_name()}")
-            with reporting(listener):
-                result = spec.run(spec.complete(params))
-        else:
-            result = spec.run(spec.complete(params))
+        with contextlib.ExitStack() as stack:
+            if listener is not None:
+                stack.enter_context(reporting(listener))
+                stack.enter_context(compile_notice(lambda line: _urgent(listener, line)))
+            spec = resolve_model(model_name)
+            version = model_version(spec)
+            # validated by load_study (or the command) already: the model takes them as given
+            result = spec.run(params)
         reported = str(result.attrs.get("status", "ok")).lower()
         if reported in ("failed", str(STATUS_FAILED)):
             raise ModelFailure(str(result.attrs.get("message", "model reported failure")))
@@ -546,6 +713,12 @@ def run_case(model_name: str, params: Mapping[str, Any], case_file: str,
             raise ModelFailure("simulation did not converge: "
                                + str(result.attrs.get("message", "no message")))
         summary = case_summary(result, spec)
+        nan = nan_outputs(summary)
+        if nan:
+            raise ModelFailure(
+                f"output(s) {', '.join(nan)} came out NaN (not a number): the model could not "
+                "determine them from this run (e.g. a record too short to measure a period, "
+                "or no motion to measure)")
         # an ok case may carry the model's note (e.g. that shooting fell back to marching)
         message = str(result.attrs.get("message", ""))
     except Exception as exc:
@@ -628,6 +801,7 @@ def run_sweep(
     *,
     retry_failed: bool = False,
     command: str | None = None,
+    worker_timeout: float | None = None,
 ) -> Path:
     """Run every case of a study on dask and consolidate the results into one archive.
 
@@ -648,7 +822,11 @@ def run_sweep(
     retry_failed
         Also recompute cases whose existing file records a failure.
     command
-        Command line recorded in the archive's ``history`` (default: ``sys.argv``).
+        Command line recorded in the archive's ``history`` and in the lock file (default:
+        ``sys.argv``).
+    worker_timeout
+        Seconds to wait for the first worker of a ``scheduler`` that has none (default
+        :data:`WORKER_TIMEOUT`); the wait is announced on stderr.
 
     Returns
     -------
@@ -662,23 +840,38 @@ def run_sweep(
     SweepError
         If the dask scheduler cannot be reached.
     pipelines.checks.InputError
-        If the output directory cannot be written or the scheduler address is malformed
+        If the output directory cannot be written, its ``archive.nc`` is not a file, another
+        sweep holds its lock (:mod:`pipelines.lock`), the number of workers is outside
+        1 to :func:`pipelines.checks.max_workers` or the scheduler address is malformed
         (nothing has run).
     """
     if workers is not None and scheduler is not None:
         raise StudyError("give either a number of workers or a scheduler address, not both")
-    if workers is not None and workers < 1:
-        raise StudyError(f"workers = {workers}: need at least one worker")
+    if workers is not None:
+        check_workers(workers)
     if scheduler is not None:
         check_scheduler_address(scheduler)
+    if worker_timeout is not None and not worker_timeout > 0:
+        raise InputError(f"--worker-timeout {worker_timeout:g}: must be > 0 seconds")
     study = load_study(study_path)
     out_dir = check_output_dir(out_dir)
-    cases_dir = check_output_dir(out_dir / CASES_DIR)
+    cases_dir = check_output_dir(out_dir / CASES_DIR, "--out")
+    check_target_file(out_dir / ARCHIVE_NAME)
+    if command is None:
+        command = shlex.join([Path(sys.argv[0]).name, *sys.argv[1:]])
 
     def say(line: str) -> None:
         if progress:
             print(line, file=sys.stderr, flush=True)
 
+    with sweep_lock(out_dir, command, say):
+        return _sweep(study, out_dir, cases_dir, workers, scheduler, retry_failed, command,
+                      worker_timeout, say)
+
+
+def _sweep(study: Study, out_dir: Path, cases_dir: Path, workers: int | None,
+           scheduler: str | None, retry_failed: bool, command: str,
+           worker_timeout: float | None, say: Callable[[str], None]) -> Path:
     total = len(study.cases)
     todo = [c for c in study.cases if not _case_done(c.path(cases_dir), retry_failed)]
     finished = total - len(todo)
@@ -689,10 +882,11 @@ def run_sweep(
     if todo:
         for case in todo:
             # Left by a writer killed mid-write; this case is about to be rewritten anyway.
-            for tmp in stale_temporaries(cases_dir, case.case_id):
+            for tmp in stale_temporaries(cases_dir, case.case_id, all_writers=True):
                 tmp.unlink(missing_ok=True)
         try:
-            _run_cases(study, todo, cases_dir, workers, scheduler, finished, total, say)
+            _run_cases(study, todo, cases_dir, workers, scheduler, finished, total, say,
+                       worker_timeout)
         except KeyboardInterrupt:
             interrupted = True
 
@@ -760,11 +954,30 @@ def _has_bokeh() -> bool:
     return importlib.util.find_spec("bokeh") is not None
 
 
+def _wait_for_workers(client: Any, scheduler: str, timeout: float, say: Any) -> None:
+    """Wait for the first worker of a scheduler that has none, saying so; SweepError after
+    ``timeout`` seconds."""
+    if client.scheduler_info().get("workers"):
+        return
+    say(f"the dask scheduler at {scheduler} has no workers yet; waiting up to {timeout:g} s "
+        f"for one (start them with: dask worker {scheduler}; --worker-timeout changes the wait)")
+    try:
+        client.wait_for_workers(1, timeout=timeout)
+    except (TimeoutError, OSError) as exc:
+        raise SweepError(
+            f"no dask worker joined the scheduler at {scheduler} within {timeout:g} s; start "
+            f"workers with 'dask worker {scheduler}' (they must be able to import bifilar and "
+            "the model) or give a longer --worker-timeout; nothing was run") from exc
+
+
 def _run_cases(study: Study, todo: list[Case], cases_dir: Path, workers: int | None,
-               scheduler: str | None, finished: int, total: int, say: Any) -> None:
+               scheduler: str | None, finished: int, total: int, say: Any,
+               worker_timeout: float | None = None) -> None:
     from distributed import as_completed
 
     with _connect(workers, scheduler) as client:
+        if scheduler is not None:
+            _wait_for_workers(client, scheduler, worker_timeout or WORKER_TIMEOUT, say)
         info = client.scheduler_info()
         dashboard = _dashboard_works(client, info)
         say(f"running {len(todo)} case(s) of {study.path} on {len(info.get('workers', {}))} "

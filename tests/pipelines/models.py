@@ -170,7 +170,8 @@ def run(params: dict[str, Any]) -> xr.Dataset:
     """Sample the exact steady state into the hub model's dataset layout."""
     if params["run_log"]:
         with open(params["run_log"], "a") as log:
-            log.write(json.dumps(params, sort_keys=True) + "\n")
+            values = params.as_dict() if hasattr(params, "as_dict") else dict(params)
+            log.write(json.dumps(values, sort_keys=True) + "\n")
     time.sleep(params["delay"])
     report(f"steady state of {params['revolutions']} revolution(s) in closed form")
     if params["fail"] == "raise":

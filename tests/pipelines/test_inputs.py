@@ -440,7 +440,7 @@ fail = "raise"
 """,
     "pendulum histories": """model = "pendulum"
 [fixed]
-periods = 1.0
+periods = 2.0
 steps_per_period = 16
 [sweep]
 hole = ["circle", "cycloid"]
