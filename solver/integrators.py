@@ -23,8 +23,8 @@ kinetic energy and mechanical work.
 * ``ed`` — energy decaying by construction: the DG(1) time-discontinuous Galerkin scheme (see
   :class:`EnergyDecaying`): E_f − E_i = W − (energy of the jump) with the jump energy ≥ 0 at
   any step size, third order and L-stable on linear systems (ρ∞ = 0), O(h³) energy loss per
-  period on resolved motion. The former ``ed`` (generalized-α with ρ∞ = 0 and an energy
-  guard) is ``galpha`` with ``rho_inf=0`` without the guard.
+  period on resolved motion. The most dissipative generalized-α is ``galpha`` with
+  ``rho_inf=0``.
 
 Multipliers are scaled as impulses (μ = c h² λ) so the Newton matrix stays well conditioned as
 h → 0 (Bottasso, Bauchau & Cardona 2007).
@@ -947,8 +947,8 @@ SCHEMES = {"ep": EnergyPreserving, "ed": EnergyDecaying, "galpha": GeneralizedAl
 
 def make_integrator(system: System, scheme: str, h: float, rho_inf: float | None = None,
                     **kw) -> Integrator:
-    """Integrator by name: ``ep``, ``ed`` or ``galpha`` (ρ∞ default 0.8; ρ∞ = 0 is the
-    dissipative generalized-α that ``ed`` was before it decayed by construction)."""
+    """Integrator by name: ``ep``, ``ed`` or ``galpha`` (ρ∞ default 0.8; ρ∞ = 0 is the most
+    dissipative generalized-α)."""
     if scheme not in SCHEMES:
         raise ValueError(f"scheme = {scheme!r}: must be one of {', '.join(SCHEMES)}")
     cls = SCHEMES[scheme]

@@ -362,7 +362,7 @@ def blade_sections(include_cuff: bool = True) -> SectionTable:
       ξ3 = 0. Davis' ``cg.dat`` has the same values and signs;
     * inertia = (i22, i33, i23) = (I22, I33, 0) from ``MOMENTS_OF_INERTIA {I11, I22, I33}``:
       I22 = ∫ρ ξ3² dA (about d2, flapwise) is our i22, I33 = ∫ρ ξ2² dA (about d3, chordwise) is
-      our i33, and I11 = I22 + I33 the polar one (so next_wave.md's director-form M22 = i33,
+      our i33, and I11 = I22 + I33 the polar one (so the director form's M22 = i33,
       M33 = i22 plus the cg terms). They are taken about the centre of mass: Dymore's
       convention as SONATA reads it (it plots I11 and I33 against its own mass-centre values and
       against Davis' "inertia about C.G."), and the data agree — Yeo's I11 follows Davis' polar
@@ -433,7 +433,7 @@ def blade_twist(line: Literal["aero", "structural"] = "aero") -> tuple[Array, Ar
         edge d2 towards d3), piecewise linear between points. The reference is the deck's,
         not the root: the aero twist is 9.67° on the inboard blade (0.135–0.17R), crosses zero
         at 0.69R (−0.14° at 0.7R), reaches −3.63° at 0.93R and −1.62° at the tip — so a
-        collective θ0 in this frame is the pitch near 0.7R (next_wave.md §6).
+        collective θ0 in this frame is the pitch near 0.7R.
     """
     body = _named("ORIENTATION_DISTRIBUTION_DEFINITION", "ORIENTATION_DISTRIBUTION_NAME",
                   TWIST_DISTRIBUTION[line])

@@ -127,7 +127,7 @@ def _deficiency_from(A, b, c, k):
 
 
 def test_constants_n2_n4_as_listed():
-    """The N = 2 and N = 4 constants of next_wave.md §3, exactly (they are short binary or
+    """The N = 2 and N = 4 constants (Peters, Karunamoorthy & Cao 1995), exactly (short binary or
     ternary fractions; the 4-decimal entries of A at N = 4 to their rounding, 5e-5)."""
     A, b, c = peters_matrices(2)
     np.testing.assert_array_equal(A, [[4.0, -2.0], [1.75, -0.5]])
@@ -167,7 +167,7 @@ def test_returned_arrays_are_private_copies():
 
 
 def test_eigenvalues_n4():
-    """eig(A) at N = 4: 0.168 ± 0.195i, 1.411, 8.670 (next_wave.md §3, 3 decimals → 5e-4)."""
+    """eig(A) at N = 4: 0.168 ± 0.195i, 1.411, 8.670 (tabulated to 3 decimals → 5e-4)."""
     ev = np.linalg.eigvals(peters_matrices(4)[0])
     ev = ev[np.lexsort((ev.imag, ev.real))]
     np.testing.assert_allclose(ev, [0.168 - 0.195j, 0.168 + 0.195j, 1.411, 8.670], atol=5e-4)
@@ -235,7 +235,7 @@ def test_initial_deviation_from_half_shrinks_geometrically():
 
 
 def test_theodorsen_table():
-    """F and G of next_wave.md §3, which are rounded to 6 decimals: |error| ≤ 5e-7 (measured
+    """Theodorsen's F and G as tabulated, rounded to 6 decimals: |error| ≤ 5e-7 (measured
     4.97e-7, i.e. the rounding; the function itself is good to ~1e-15, see the Bessel test)."""
     k = [0.01, 0.05, 0.1, 0.2, 0.3, 0.5, 1.0, 2.0]
     F = [0.982422, 0.909009, 0.831924, 0.727580, 0.664971, 0.597936, 0.539435, 0.512955]
@@ -280,7 +280,7 @@ def test_theodorsen_limits_and_shapes():
 # ------------------------------------------------------------------------------------------
 # Finite-state frequency response
 
-# max over k ∈ [0.01, 2] of |C_N − C|: next_wave.md §3 (apparently truncated to the digits shown)
+# max over k ∈ [0.01, 2] of |C_N − C|: as tabulated (apparently truncated to the digits shown)
 # and as measured on K_GRID, rounded to 6 decimals (a bounded local search moves the maxima by
 # < 1e-7).
 NOTES_ERROR = {2: 0.144, 4: 0.034, 6: 0.015, 8: 0.0096, 10: 0.0082, 12: 0.031}
@@ -355,7 +355,7 @@ def _jones(s):
 
 
 def test_wagner_table():
-    """Notes' 4-decimal table: 6e-5, since φ(20) = 0.936649 is printed 0.9367 (off by 5.1e-5
+    """The 4-decimal Wagner table: 6e-5, since φ(20) = 0.936649 is printed 0.9367 (off by 5.1e-5
     from its rounding; the 30-digit value settles it). Against mpmath: 1e-10 (measured 2e-12)."""
     phi = wagner(S_TABLE)
     np.testing.assert_allclose(phi, WAGNER_NOTES, rtol=0.0, atol=6e-5)

@@ -73,7 +73,7 @@ def test_curved_twisted_reference_is_stress_free_and_gradients_exact():
 def test_rollup_exact_circle(level, n_el, tol):
     """End moment M = level · 2π EI/L bends a cantilever into an arc of radius EI/M; level 1
     is the full circle (Kynema's static_isotropic_beam_rollup). Errors relative to L measured:
-    (0.25, 6) 1.1e-6, (0.5, 6) 1.2e-4, (0.5, 12) 7e-6, (1, 12) 1.21e-3 (note §1.3 (b): the
+    (0.25, 6) 1.1e-6, (0.5, 6) 1.2e-4, (0.5, 12) 7e-6, (1, 12) 1.21e-3 (the
     director form gives −9.998793 at 12 elements; the error is the director interpolation
     over 30° per element and falls ~20× per halving of the element size)."""
     length, ei = 10.0, 86.9e3
@@ -110,7 +110,7 @@ def test_bathe_bolourchi_45_degree_bend():
     """45° bend, R = 100, tip force 600 out of plane. Bathe & Bolourchi (1979) give tip
     displacements (13.4, 23.5, 53.4) (in-plane x, y magnitudes, out-of-plane); the converged
     director value (12 elements, reduced) is (−23.5613, −13.6050, 53.4763) along (initial
-    tangent, in-plane normal, out of plane), note §1.3 (d)."""
+    tangent, in-plane normal, out of plane)."""
     sec = isotropic_section(EA=1e7, GA2=4.16667e6, GA3=4.16667e6, GJ=8.333e5, EI2=8.333e5,
                             EI3=8.333e5)
     b = arc_beam("b", (0, 100, 0), 100.0, (0, 0, 0), np.pi / 4, sec, n_elements=12)
@@ -212,7 +212,7 @@ def test_beam_dynamics_second_order(scheme):
     assert np.all((ratios > 3.2) & (ratios < 4.6)), ratios
 
 
-ROTATING_TABLE = {  # λ: flap 1, 2, 3 (ω*), Wright et al. 1982 / next_wave.md §1.3 (e)
+ROTATING_TABLE = {  # λ: flap 1, 2, 3 (ω*), Wright et al. 1982
     0: (3.5160, 22.0345, 61.6972),
     2: (4.1373, 22.6149, 62.2732),
     6: (7.3604, 26.8091, 66.6839),

@@ -3,13 +3,13 @@
 References, each independent of the code under test:
 
 * closed forms of the lowest Peters–He member, evaluated by hand from the Γ, H and φ formulas
-  of Peters & He (1995) (uh60_aero.md §3.3, whose 4-digit values are checked too);
+  of Peters & He (1995) (their 4-digit tabulated values are checked too);
 * the orthonormality of the Peters–He shapes with weight ν = √(1 − r̄²) (Gauss–Jacobi);
-* the hover convergence table of uh60_aero.md §3.3 and linear actuator-disk theory in hover
+* the hover convergence table of Peters & He (1995) and linear actuator-disk theory in hover
   (λ = ΔC_p / (2V) point by point: the disturbance pressure is odd in z, so the disk sees half
   the pressure jump), reached through the blade-load weights a lifting line will use;
 * momentum theory and Glauert's formula (solved here with brentq), the Pitt–Peters skew
-  gradient (15π/32) X, the Peters–He one (2π/3) X, and the UH-60A numbers of next_wave.md §4;
+  gradient (15π/32) X, the Peters–He one (2π/3) X, and the UH-60A flight condition's numbers;
 * the exact (Riccati) hover response and its linearized time constant, against the solver's
   integrators;
 * central finite differences for the Jacobian, complex steps for the section functions.
@@ -44,7 +44,7 @@ HOVER = FlightCondition()
 
 
 def cruise(mu: float = 0.2071, tilt_deg: float = 3.0) -> FlightCondition:
-    """U = μ ΩR with the shaft tilted forward by tilt_deg (next_wave.md §4: U = 150 ft/s)."""
+    """U = μ ΩR with the shaft tilted forward by tilt_deg (the UH-60A case: U = 150 ft/s)."""
     return FlightCondition(mu * TIP_SPEED, math.radians(tilt_deg))
 
 
@@ -77,7 +77,7 @@ def uniform_disk_forcing(e: DynamicInflow, dcp, n_blades: int = 4, n_radial: int
 # ---------------------------------------------------------------- 1. lowest Peters–He member
 @pytest.mark.parametrize("x", [0.0, 0.25, 0.8887, 1.0, 1.6])
 def test_peters_he_lowest_member_closed_form(x):
-    # By hand from Γ (uh60_aero.md §3.3), H_1^0 = 1, H_2^1 = 2/3, H_3^2 = 8/15:
+    # By hand from Γ (Peters & He 1995), H_1^0 = 1, H_2^1 = 2/3, H_3^2 = 8/15:
     # Γ_11^00 = (−1)·2·3/(1·2·4·(−1)) = 3/4; Γ_12^01 = −π/(2√(H_2^1 H_1^0)·√15) = −π/(2√10)
     # (r+m odd, sgn(0−1) = −1) with the row factor X^m = X; Γ_21^10 = +π/(2√10) with
     # X^1 + X^1 = 2X; Γ_22^11 = (−1)·2·5/((2/3)·4·6·(−1)) = 5/8 with 1 ∓ X²; K = (2/π) H.
@@ -265,7 +265,7 @@ def test_pitt_peters_forward_flight_is_glauert_with_skew_gradient():
     assert lam_f == pytest.approx(0.2071 * math.sin(math.radians(3)), rel=1e-14)
     assert lam[0] == pytest.approx(glauert(ct, mu, lam_f), rel=1e-10)  # measured 1e-16
     fl = e.flow(lam)
-    # next_wave.md §4 (W = 16 000 lb, α_TPP = −3°): λ ≈ 0.02446, χ ≈ 83.3°; with C_T rounded
+    # the UH-60A case (W = 16 000 lb, α_TPP = −3°): λ ≈ 0.02446, χ ≈ 83.3°; with C_T rounded
     # to 0.00567 we get 0.024452 and 83.256° (the table used C_T = 0.005672: 0.02446)
     assert fl.lambda_total == pytest.approx(0.02446, rel=5e-4)
     assert math.degrees(fl.chi) == pytest.approx(83.3, abs=0.05)

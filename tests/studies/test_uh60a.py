@@ -3,15 +3,15 @@
 Checks, with the margins measured:
 
 * the deck reader on a synthetic deck (nesting, named blocks, pairs on one line, comments, errors);
-* Yeo's 46 stations and their values against the table of uh60_aero.md §1.3;
+* Yeo's 46 stations and their values against Yeo's published table;
 * the Davis cuff and its meeting with Yeo's table (a jump at the attachment, mass continuous);
 * blade mass 120.04 kg integrated exactly (116.5 kg published, +3.0 %; the hinge lump, 3.48 kg,
   is the whole difference: 116.56 kg without it), first moment 391.3 kg·m (385.7 published,
   +1.5 %) and flap inertia 2087.9 kg·m² (2050.8, +1.8 %) about the hinge;
 * twist −0.14° at 0.7R, chord, airfoils, the fan-plot file (11 rows);
 * an independent rotating Euler–Bernoulli beam (cubic Hermite elements, centrifugal stiffening,
-  hinged at e, uncoupled flap and lag) built from the SectionTable, against next_wave.md §2.2:
-  flap 1.0350, 2.8394, lag 0.2669 /rev at 27 rad/s (notes 1.035, 2.839, 0.267), and lag 2 /
+  hinged at e, uncoupled flap and lag) built from the SectionTable, against a reference
+  computation: flap 1.0350, 2.8394, lag 0.2669 /rev at 27 rad/s (1.035, 2.839, 0.267), and lag 2 /
   flap 4 against the fan plot's "f4" / "f5" columns (−1.6 %, +0.3 %), which is why "f4" is read
   as lag 2. This guards the reading of units, axes (which EI is flap) and the radius offset.
 """
@@ -122,7 +122,7 @@ def test_yeo_stations():
 
 
 # (r [m]; EA, EI_flap, EI_lag, GJ [N, N·m²]; m [kg/m]; I22, I33 [kg·m]; x_cg [m]):
-# rows of uh60_aero.md §1.3, to its printed digits
+# rows of Yeo's table, to its printed digits
 TABLE = [
     (1.636, 2.8e8, 7.92e4, 1.35e6, 7.43e4, 10.34, 0.0268, 0.0804, -0.0069),
     (3.272, 2.78e8, 6.37e4, 2.4e6, 6.98e4, 10.27, 0.0365, 0.1095, -0.0209),
@@ -181,7 +181,7 @@ def test_blade_mass_and_moments():
     # the published blade weight (116.5 kg, GenHel) is matched to 0.05 % without the hinge lump
     assert mass == pytest.approx(UH60A.blade_mass, rel=0.035)
     assert mass - lump == pytest.approx(UH60A.blade_mass, rel=5e-3)
-    # about the hinge (the Yeo part alone gives 386.7 and 2086.5, as uh60_aero.md §1.1 quotes)
+    # about the hinge (the Yeo part alone gives 386.7 and 2086.5)
     assert first == pytest.approx(UH60A.blade_first_moment, rel=0.025)
     assert flap_inertia == pytest.approx(UH60A.blade_flap_inertia, rel=0.025)
     yeo = blade_sections(include_cuff=False)
@@ -201,7 +201,7 @@ def test_twist():
     assert len(r) == 83 and np.all(np.diff(r) > 0)
     assert r[0] == pytest.approx(UH60A.attachment_radius) and r[-1] == pytest.approx(R)
     at = np.degrees(np.interp(np.array([0.15, 0.5, 0.7, 0.93, 1.0]) * R, r, twist))
-    # the deck's reference: ≈ 0 at 0.7R (uh60_aero.md §1.3: 9.67, 3.59, −0.14, −3.63, −1.62)
+    # the deck's reference: ≈ 0 at 0.7R (9.67, 3.59, −0.14, −3.63, −1.62)
     assert at == pytest.approx([9.67, 3.59, -0.14, -3.63, -1.62], abs=0.06)
     assert abs(at[2]) < 0.2
     rs, ts = uh60a.blade_twist("structural")
@@ -301,7 +301,7 @@ def test_rotating_beam_frequencies_match_reference():
     M, Kf, Kl = rotating_beam(blade_sections(), E, OMEGA)
     flap = per_rev(M, Kf, OMEGA, 4)
     lag = per_rev(M, Kl, OMEGA, 2)
-    # next_wave.md §2.2 (uncoupled, 120 elements): flap 1.035, 2.839, 5.035, 7.892; lag 0.267,
+    # a reference computation (uncoupled, 120 elements): flap 1.035, 2.839, 5.035, 7.892; lag 0.267,
     # 4.801
     assert flap[:2] == pytest.approx([1.035, 2.839], rel=0.01)
     assert lag[0] == pytest.approx(0.267, rel=0.01)
