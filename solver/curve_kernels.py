@@ -3,9 +3,9 @@
 :class:`solver.curve_joints.CurveSlidingSet` evaluates J joints that share one curve: the
 constraint values and Jacobian, the exact discrete derivative of the energy-preserving scheme
 and the λ-weighted Hessian of its Newton tangent, each once or twice per Newton iteration. In
-vectorized NumPy every one of these was some tens of einsum/stack calls on (J, 3, 3) arrays
-(J = 4 on the hub model), so the cost was interpreter and small-array overhead, not
-arithmetic: about 40 % of a hub case's time. Here each is one compiled loop over the joints
+vectorized NumPy every one of these is some tens of einsum/stack calls on (J, 3, 3) arrays
+(J = 4 on the hub model), whose cost is interpreter and small-array overhead, not
+arithmetic. Here each is one compiled loop over the joints
 (numba, like :mod:`solver.bsplines`) that reads the directors straight from q and writes the
 values in the set's sparse pattern order. The kernels evaluate the curve themselves (its
 B-spline, ``NurbsCurve.spline``, through :func:`solver.bsplines.nurbs_eval`) and build a planar
@@ -15,10 +15,10 @@ curve's frame (:func:`_planar_frame`); only a space curve's Frenet frame comes f
 The nonholonomic relations that go with the joint are here too, one compiled call per set
 each: the arc length ṡ − |p*'(η)| η̇ = 0 (Eq. 25: :func:`arc_length_matrix`,
 :func:`arc_length_derivative`) and rolling ṡ + σ r (ω_pin − ω_link)·n = 0 (Eq. 5:
-:func:`rolling_matrix`, :func:`rolling_derivative`). In NumPy these were small-array calls
+:func:`rolling_matrix`, :func:`rolling_derivative`). In NumPy these are small-array calls
 (a curve evaluation, norms, broadcast cross products) several times per Newton iteration;
-compiling them, the planar frame of the joint's Hessian and the rotational springs
-(:mod:`solver.rotation_kernels`) took a free hub case from 6.8–8.0 s to 3.3–4.7 s of CPU.
+compiled, with the planar frame of the joint's Hessian and the rotational springs
+(:mod:`solver.rotation_kernels`), they about halve a free hub case's CPU time.
 
 Layout of one joint (column indices within the joint's column block, as
 ``CurveSlidingSet._structure``): 0:3 x_k, 3:12 the directors d_1^k, d_2^k, d_3^k, 12:15 x_ℓ,

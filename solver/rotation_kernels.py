@@ -7,10 +7,10 @@ coefficients on the body's directors; a grounded element has a constant e^a):
     c = e1ᵃ·e1ᵇ = cos φ,   s = −e1ᵃ·e2ᵇ = sin φ   (times the same factor off the manifold),
     φ = atan2(s, c),   ∇φ = (c ∇s − s ∇c)/r²,   r² = c² + s²,
 
-with c and s bilinear in the two bodies' directors. Its moment, gradient and the tangent of a
-damper were some tens of einsum/concatenate calls on (J, k) and (J, k, k) arrays per call (J
-the number of elements, k ≤ 18 the director columns they touch), called several times per
-Newton iteration: interpreter overhead, not arithmetic. Here each is one compiled loop over
+with c and s bilinear in the two bodies' directors. In NumPy its moment, gradient and the
+tangent of a damper are some tens of einsum/concatenate calls on (J, k) and (J, k, k) arrays
+per call (J the number of elements, k ≤ 18 the director columns they touch), called several
+times per Newton iteration: interpreter overhead, not arithmetic. Here each is one compiled loop over
 the elements (numba, like :mod:`solver.curve_kernels`).
 
 Column layout of one element (``RelativeRotationSet.idx``): first body a's active directors

@@ -114,9 +114,9 @@ NEWTON_TOL = 1e-7
 NEWTON_STEPS = 240
 # The lifting lines' wake states (m/s) are judged on a tolerance this many times Newton's. The
 # loads see them beside the sections' velocities, whose Newton error is the positions' times
-# γ/(βh) (1.9e3 /s at 240 steps/rev, ρ∞ = 0.5): a wake state held to the positions' 2.9e-6 was
-# held 1900 times tighter than the velocity it is added to. It was also what Newton iterated
-# for: with kept factors the wake states' updates shrink by 0.05–0.1 per iteration, the
+# γ/(βh) (1.9e3 /s at 240 steps/rev, ρ∞ = 0.5): a wake state held to the positions' 2.9e-6
+# would be held 1900 times tighter than the velocity it is added to, and Newton would iterate
+# for it: with kept factors the wake states' updates shrink by 0.05–0.1 per iteration, the
 # motion's faster. Measured on the free case, settled: 2.74 → 2.25 iterations per step and
 # 0.12 → 0.083 factorizations (×10: 2.39; ×100: 2.27, no further gain). Table 1's case 1 at a
 # periodicity tolerance of 1e-3, against Newton at 1e-9: 4P hub moment (177.9, 123.9) N·m
