@@ -10,8 +10,8 @@ coefficients on the body's directors; a grounded element has a constant e^a):
 with c and s bilinear in the two bodies' directors. In NumPy its moment, gradient and the
 tangent of a damper are some tens of einsum/concatenate calls on (J, k) and (J, k, k) arrays
 per call (J the number of elements, k ≤ 18 the director columns they touch), called several
-times per Newton iteration: interpreter overhead, not arithmetic. Here each is one compiled loop over
-the elements (numba, like :mod:`solver.curve_kernels`).
+times per Newton iteration: interpreter overhead, not arithmetic. Here each is one compiled
+loop over the elements (numba, like :mod:`solver.curve_kernels`).
 
 Column layout of one element (``RelativeRotationSet.idx``): first body a's active directors
 (those with a non-zero coefficient in some member; none if grounded), 3 columns each, then
