@@ -274,8 +274,8 @@ def test_newton_matrix_keeps_one_pattern():
 @pytest.mark.parametrize("name", ["rolling on hub", "driven rod", "heavy top"])
 def test_end_velocity_is_tangent_to_the_constraints(name):
     """The step's constraint force acts through the chord only, so the rows alone leave a
-    velocity component normal to the constraints undamped: it alternated in sign from step
-    to step and, fed by the aerodynamic loads, grew until Newton failed on the rotor in
+    velocity component normal to the constraints undamped: it would alternate in sign from
+    step to step and, fed by the aerodynamic loads, grow until Newton fails on the rotor in
     forward flight. The end velocity is projected (M-closest) onto G(q)v + ∂C/∂t = 0,
     A(q)v = 0; the projection's kinetic-energy loss is booked as numerical dissipation."""
     if name == "rolling on hub":

@@ -27,8 +27,8 @@ def _kept_factors(scale: float) -> LinearSolver:
 def test_slowly_contracting_kept_factors_are_refreshed_not_taken_for_roundoff():
     """Kept factors contracting by 0.7 per iteration give updates that stop shrinking (rate
     0.7 > 0.5) while still within 1/ROUNDOFF_FLOOR of the tolerance: that is stale factors,
-    not roundoff. Newton must refresh them and reach the tolerance (the rotor's steps were
-    accepted with errors up to 5e4 times it)."""
+    not roundoff. Newton must refresh them and reach the tolerance (taken for roundoff, a
+    rotor's steps would be accepted with errors up to 5e4 times it)."""
     x0 = X + 1e3 * TOL * np.array([1.0, -1.0, 0.5])
     res = newton(lambda x: A @ x - B, lambda x: A, x0, max_abs, TOL, _kept_factors(0.3))
     assert res.converged and res.factorizations == 1, res
