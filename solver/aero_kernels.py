@@ -5,7 +5,7 @@ airfoil in the section's frame (circulatory lift at the quarter chord, profile d
 mass) and its share of the rotor inflow forcing; the formulas and their derivation are in the
 docstring of :mod:`solver.lifting_line`. The force Jacobians are complex steps of the same
 formula by each of the section's 36 + N + n_i local inputs. As a vectorized NumPy kernel this
-was some eighty array operations on arrays of a few dozen sections per call (and one call on a
+is some eighty array operations on arrays of a few dozen sections per call (and one call on a
 36 + N + n_i times larger complex batch for the Jacobians): interpreter overhead, not
 arithmetic. Here :func:`section_loads` is the one implementation of the formula, compiled by
 numba for float64 (the forces and the ``details`` of
