@@ -9,7 +9,7 @@ M = P = 4); 96 steps per revolution with ``ep``.
 
 Prints the unknowns, the steps per second of the time loop, the Newton iterations per step,
 the set-up and loop wall times (s) and the thrust coefficient at the end against the
-closed-form blade-element/momentum value (tests/test_lifting_line.py).
+closed-form blade-element/momentum value (tests/solver/lifting_line_models.py).
 """
 
 from __future__ import annotations

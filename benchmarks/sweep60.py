@@ -6,7 +6,7 @@
 The study sweeps ``tuning_order`` (12 values, 2.7-3.3) against ``fuselage_stiffness_scale``
 (5 values, 0.5-1.5); ``--cases N`` keeps the first N cases in that order (a reduced run), and
 ``--steps-per-rev``, ``--max-revolutions``, ``--periodic-tolerance`` make each case cheaper (a
-default hub case costs about 4 s of CPU, 3 s without its step-error estimate). Each run starts
+default hub case costs about 2 s of CPU, 1.5 s without its step-error estimate). Each run starts
 from an empty output directory (nothing resumed) and prints one JSON object: workers, cases,
 wall time, cases per hour, the driver's peak resident memory (this process, which holds the dask
 client and, for a local cluster, the scheduler; measured as the growth of ``ru_maxrss`` over the
