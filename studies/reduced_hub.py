@@ -40,7 +40,7 @@ swing equation's residual, evaluated on M samples per revolution and projected o
 0…H, is solved for zero (Newton's method, from the linear response, by continuation in the
 forcing amplitude if the direct solve fails; 0.034 s). Measured at that 16.6° swing: H = 12 and
 H = 24 agree to 1.3e-9 rad, and the multibody hub's periodic response to 1.5e-4 of each
-signal's largest harmonic (``tests/test_reduced_hub.py``).
+signal's largest harmonic (``tests/studies/test_reduced_hub.py``).
 """
 
 from __future__ import annotations

@@ -275,7 +275,7 @@ def lag_feedback_gains(p: dict[str, Any]) -> tuple[float, float, float]:
     cancels its real part and leaves the damping 2b, so b = ζ I νΩ. The actual lag mode is
     coupled to the hub and fuselage and shifted by the feedback itself (a delay equation): on
     a single lag degree of freedom ζ = 0.5 gives a decay of about 0.5 per revolution instead
-    of 0.95 (tests/test_solver_core.py checks the delay equation's roots)."""
+    of 0.95 (tests/solver/test_solver_core.py checks the delay equation's roots)."""
     omega = p["hub_speed"]
     nu = math.sqrt(UH60A.hinge_radius * UH60A.blade_first_moment / UH60A.blade_flap_inertia)
     w, th = nu * omega, 2 * math.pi * nu

@@ -122,7 +122,7 @@ def _reference(w, n, pitch, plunge, deficiency=None):
 
 
 # The finite-state model's own error against Theodorsen (max over k ∈ [0.01, 2] of |C_N − C|,
-# from tests/test_airfoil.py) bounds the load error relative to the circulatory part.
+# from tests/solver/test_airfoil.py) bounds the load error relative to the circulatory part.
 MODEL_ERROR = {2: 0.144, 4: 0.034, 6: 0.015, 8: 0.0096, 10: 0.0082}
 
 
@@ -420,7 +420,7 @@ def test_forward_flight_inflow_follows_the_blade_loads():
 def test_harmonic_pitch_error_against_theodorsen_for_every_supported_n(n):
     """k from 0.02 to 2: the simulated lift follows the finite-state model's closed form, and
     its error against Theodorsen is that model's own C_N − C (the table of
-    tests/test_airfoil.py)."""
+    tests/solver/test_airfoil.py)."""
     worst = 0.0
     for k in (0.02, 0.05, 0.1, 0.2, 0.5, 1.0, 2.0):
         w, lift, _ = typical_section(k, n, 1e-3, 0.0)

@@ -363,7 +363,7 @@ def test_galpha_frequency_error_at_the_rotor_step(scheme, rho_inf, harmonic, err
     assert -lam.real / abs(lam) == pytest.approx(damping, rel=0.1, abs=1e-5)
 
 
-# ed against its analysis (Padé amplification, decay, orders): tests/test_energy_decaying.py
+# ed against its analysis (Padé amplification, decay, orders): test_energy_decaying.py
 
 
 @pytest.mark.parametrize("steps_per_period", [

@@ -296,7 +296,7 @@ def _exact_error(given: dict):
     """The largest error of a run's harmonics 0–8 (last revolution, every sampled signal),
     relative to each signal's largest, against the exact equations' periodic response
     (``reduced_samples``: harmonic balance, no time step; it and the multibody agree to
-    1.5e-4 when the multibody's step is refined, tests/test_reduced_hub.py)."""
+    1.5e-4 when the multibody's step is refined, tests/studies/test_reduced_hub.py)."""
     from studies import hub
     from studies.periodic import referred_harmonics
 
