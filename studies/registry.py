@@ -38,3 +38,38 @@ def get_model(name: str) -> ModelSpec:
     spec = getattr(importlib.import_module(module), attr)
     _LOADED[name] = spec
     return spec
+
+
+def resolve_model(ref: str) -> ModelSpec:
+    """The :class:`ModelSpec` for a registry name or a ``"module:attribute"`` reference.
+
+    Parameters
+    ----------
+    ref
+        ``"hub"`` (a name in this registry) or ``"package.module:SPEC"`` (a plug-in model:
+        every process that runs it, e.g. each dask worker, imports the module itself).
+
+    Raises
+    ------
+    ParameterError
+        With one line, if the model cannot be found or imported.
+    """
+    if ":" in ref:
+        module_name, _, attr = ref.partition(":")
+        try:
+            spec = getattr(importlib.import_module(module_name), attr)
+        except (ImportError, AttributeError) as exc:
+            raise ParameterError(
+                f"cannot load model {ref!r}: {type(exc).__name__}: {exc} "
+                "(a plug-in model is 'importable.module:ATTRIBUTE'; is its module on the path?)"
+            ) from exc
+        if not isinstance(spec, ModelSpec):
+            raise ParameterError(f"model {ref!r} is a {type(spec).__name__}, not a ModelSpec")
+        return spec
+    try:
+        return get_model(ref)
+    except ImportError as exc:
+        raise ParameterError(
+            f"cannot load model {ref!r}: {type(exc).__name__}: {exc}; available models: "
+            f"{', '.join(available())}"
+        ) from exc

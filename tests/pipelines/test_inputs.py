@@ -37,14 +37,10 @@ from pipelines import cli, study_commands
 from pipelines import sweep as sweep_module
 from pipelines.archive import open_archive, write_case
 from pipelines.checks import InputError, check_scheduler_address
-from pipelines.sweep import (
-    StudyError,
-    consolidate_study,
-    load_study,
-    make_case_id,
-    model_version,
-    run_case,
-)
+from pipelines.cluster import dashboard_works
+from pipelines.studyfile import StudyError, load_study, make_case_id, model_version
+from pipelines.sweep import consolidate_study
+from pipelines.worker import run_case
 from studies import bifilar, collar, hub
 from studies.parameters import Param, ParameterError
 
@@ -507,7 +503,7 @@ def test_dashboard_link_only_when_it_works():
 
     with (LocalCluster(n_workers=0, processes=False, dashboard_address="127.0.0.1:0") as lc,
           Client(lc) as client):
-        works = sweep_module._dashboard_works(client, client.scheduler_info())
+        works = dashboard_works(client, client.scheduler_info())
         assert works == (importlib.util.find_spec("bokeh") is not None)
         if works:
             # the link names the host's address; the test reads it on the loopback

@@ -38,15 +38,9 @@ from pipelines.archive import (
     write_case,
 )
 from pipelines.plots import plot_archive
-from pipelines.sweep import (
-    StudyError,
-    consolidate_study,
-    load_study,
-    make_case_id,
-    model_version,
-    run_case,
-    run_sweep,
-)
+from pipelines.studyfile import StudyError, load_study, make_case_id, model_version
+from pipelines.sweep import consolidate_study, run_sweep
+from pipelines.worker import run_case
 from studies.harmonics import N_MAX, case_harmonics, harmonics
 
 REPO = Path(__file__).resolve().parents[2]
@@ -225,13 +219,13 @@ def test_run_case_records_failure_as_a_value(tmp_path, fail, match):
 def test_local_cluster_workers_start_with_the_solvers_malloc_thresholds(monkeypatch):
     """The local cluster's workers start with glibc malloc thresholds that keep the solver's
     per-step arrays in the heap, not dask's MALLOC_TRIM_THRESHOLD_ = 65536 (which made a
-    rotor revolution 9.0 s instead of 4.7 s, measured; see ``pipelines.sweep``)."""
-    from pipelines.sweep import MALLOC_ENVIRON, _connect
+    rotor revolution 9.0 s instead of 4.7 s, measured; see ``pipelines.cluster``)."""
+    from pipelines.cluster import MALLOC_ENVIRON, connect
 
     for key in MALLOC_ENVIRON:  # a variable already set (here or by an earlier cluster) wins
         monkeypatch.setenv(key, "0")
         monkeypatch.delenv(key)
-    with _connect(1, None) as client:
+    with connect(1, None) as client:
         seen = client.run(lambda: {k: os.environ.get(k) for k in MALLOC_ENVIRON})
     assert list(seen.values()) == [{k: str(v) for k, v in MALLOC_ENVIRON.items()}]
 

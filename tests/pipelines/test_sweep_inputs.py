@@ -25,20 +25,15 @@ import pytest
 import xarray as xr
 from click.testing import CliRunner
 
-from pipelines import cli
+from pipelines import cli, studyfile
 from pipelines import sweep as sweep_module
 from pipelines.archive import _WRITER, STATUS_FAILED, STATUS_OK, read_case, stale_temporaries
 from pipelines.checks import InputError, max_workers
+from pipelines.cluster import SweepError
 from pipelines.lock import LOCK_NAME
-from pipelines.sweep import (
-    MAX_CASES,
-    StudyError,
-    SweepError,
-    compile_notice,
-    load_study,
-    run_case,
-    run_sweep,
-)
+from pipelines.studyfile import MAX_CASES, StudyError, load_study
+from pipelines.sweep import run_sweep
+from pipelines.worker import compile_notice, run_case
 from studies.parameters import ModelSpec, Output, Param
 from studies.registry import register
 
@@ -141,7 +136,7 @@ def test_a_study_above_the_case_limit_is_refused_before_expanding(tmp_path, monk
     def no_cases_made(*args: Any) -> Any:
         raise AssertionError("cases were expanded")
 
-    monkeypatch.setattr(sweep_module, "make_case_id", no_cases_made)
+    monkeypatch.setattr(studyfile, "make_case_id", no_cases_made)
     with pytest.raises(StudyError) as info:
         load_study(path)
     message = str(info.value)
