@@ -88,19 +88,19 @@ CASE_SETTINGS = {
 def one_case(repeat: int) -> None:
     import numpy as np
 
-    from studies.hub import SPEC, holes_for, reduced_samples, run
+    from studies.hub import SPEC, design, reduced_samples, run
     from studies.periodic import referred_harmonics
 
-    p = SPEC.complete({})
-    holes = holes_for(p)
+    p = SPEC.validate({})
+    d = design(p)
 
     def error(ds) -> float:  # harmonics 0–8 of the last revolution against the exact ones
         n = ds.attrs["samples_per_rev"]
         rows = np.column_stack([ds["time"].values[-n:], *(ds[k].values[..., -n:].T for k in (
             "hub_x_fixed", "hub_y_fixed", "hub_force_x_fixed", "hub_force_y_fixed",
             "bifilar_cm_x_fixed", "bifilar_cm_y_fixed", "pin_angle"))])
-        a, b = (referred_harmonics(r, p["hub_speed"], 8)
-                for r in (rows, reduced_samples(p, holes, rows[:, 0])))
+        a, b = (referred_harmonics(r, p.hub_speed, 8)
+                for r in (rows, reduced_samples(p, d, rows[:, 0])))
         return float(np.max(np.abs(a - b) / np.abs(b).max(axis=0)))
 
     run({})  # loads the compiled kernels

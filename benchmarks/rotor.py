@@ -28,7 +28,7 @@ def per_revolution(p: dict, revolutions: int, profile: bool) -> dict:
     t0 = time.perf_counter()
     model, parts = build(p)
     system = System(model)
-    integ = integrator(system, p, 2 * np.pi / p["hub_speed"] / p["steps_per_rev"], parts)
+    integ = integrator(system, p, 2 * np.pi / p.hub_speed / p.steps_per_rev, parts)
     setup = time.perf_counter() - t0
     profiler = None
     if profile:
@@ -37,7 +37,7 @@ def per_revolution(p: dict, revolutions: int, profile: bool) -> dict:
         profiler = Profiler()
         profiler.start()
     t1 = time.perf_counter()
-    for _ in range(revolutions * p["steps_per_rev"]):
+    for _ in range(revolutions * p.steps_per_rev):
         info = integ.step()
         if not info.converged:
             raise SystemExit(f"step failed at t = {integ.t:.4g} s: {info.message}")
@@ -45,7 +45,7 @@ def per_revolution(p: dict, revolutions: int, profile: bool) -> dict:
     if profiler is not None:
         profiler.stop()
         print(profiler.output_text(unicode=True, color=False, show_all=False))
-    return {"bifilar": p["bifilar"], "unknowns": system.n, "steps_per_rev": p["steps_per_rev"],
+    return {"bifilar": p.bifilar, "unknowns": system.n, "steps_per_rev": p.steps_per_rev,
             "setup_s": round(setup, 2), "seconds_per_rev": round(loop / revolutions, 2),
             "steps_per_s": round(integ.n_steps / loop, 2),
             "newton_per_step": round(integ.n_iterations / integ.n_steps, 2)}
@@ -56,7 +56,7 @@ def per_case(p: dict) -> dict:
     ds = run(p)
     wall = time.perf_counter() - t0
     revs = ds.attrs["transient_revolutions"] + ds.attrs["revolutions"]
-    return {"bifilar": p["bifilar"], "wall_s": round(wall, 1), "revolutions": int(revs),
+    return {"bifilar": p.bifilar, "wall_s": round(wall, 1), "revolutions": int(revs),
             "seconds_per_rev": round(wall / revs, 2),
             "newton_per_step": round(ds.attrs["newton_iterations"] / ds.attrs["steps"], 2),
             "thrust_coefficient_over_solidity": round(
@@ -78,7 +78,7 @@ def main() -> None:
         given["steps_per_rev"] = args.steps_per_rev
     if args.scheme:
         given["scheme"] = args.scheme
-    p = SPEC.complete(given)
+    p = SPEC.validate(given)
     res = per_case(p) if args.case else per_revolution(p, args.revolutions, args.profile)
     print(json.dumps(res))
 

@@ -12,7 +12,7 @@ models archive with the same names and units.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from functools import lru_cache
 
 import numpy as np
 from numpy.typing import NDArray
@@ -28,7 +28,7 @@ from studies.equivalent import (
     particle_state,
 )
 from studies.holes import Geometry, Holes, design
-from studies.parameters import Output, Param
+from studies.parameters import Output, Param, Parameters
 
 N_BIFILARS = 4
 FIRST_ANGLE = np.pi / 4  # bifilar 0 at 45° from blade 0
@@ -81,29 +81,42 @@ OUTPUTS: dict[str, Output] = {
 }
 
 
-def geometry(p: dict[str, Any]) -> Geometry:
-    """The bifilar hardware of a complete parameter set."""
-    return Geometry(p["arm_radius"], p["cm_offset"], p["pin_diameter"], p["tuning_mass"],
-                    p["pin_mass"], p["pin_inertia"])
+def geometry(p: Parameters) -> Geometry:
+    """The bifilar hardware of a parameter set that declares :data:`PARAMETERS`."""
+    return Geometry(p.arm_radius, p.cm_offset, p.pin_diameter, p.tuning_mass, p.pin_mass,
+                    p.pin_inertia)
 
 
-def holes_for(p: dict[str, Any]) -> Holes:
+def holes_for(p: Parameters) -> Holes:
     """Holes of the requested shape and tuning order (raises ParameterError if the geometry
-    admits none)."""
-    return design(p["hole"], geometry(p), tuning_order=p["tuning_order"])
+    admits none).
+
+    The same hardware gives the same holes: a sweep over anything else (the fuselage, the
+    shears, the time step) designs them once, and validating a parameter set (which designs
+    them to check the geometry) leaves them designed for its run."""
+    return _designed(p.hole, p.tuning_order, p.arm_radius, p.cm_offset, p.pin_diameter,
+                     p.tuning_mass, p.pin_mass, p.pin_inertia)
 
 
-def pin_damping(p: dict[str, Any], holes: Holes) -> float:
+@lru_cache(maxsize=64)
+def _designed(hole: str, tuning_order: float, *hardware: float) -> Holes:
+    return design(hole, Geometry(*hardware), tuning_order=tuning_order)
+
+
+def pin_damping(p: Parameters, holes: Holes) -> float:
     """Rotational damping (N·m·s/rad) on the pin's rotation relative to its link giving the
     pendulum damping ratio ζ: the pin turns at (D/d) φ̇ relative to the link for circular
     holes (D the equivalent hole diameter), the pendulum's inertia is r²(m_b + m_p/2 + 2I_p/d²)
-    per Eq. (7), so c = 2 ζ ω M_eff (d/D)²."""
+    per Eq. (7), so c = 2 ζ ω M_eff (d/D)². Zero for locked bifilars (their pins do not
+    turn)."""
+    if p.bifilar == "locked":
+        return 0.0
     g = holes.geometry
     r = holes.rho_v
     d_hole = holes.hole_diameter
     m_eff = r * r * (g.tuning_mass + 0.5 * g.pin_mass + 2 * g.pin_inertia / g.pin_diameter**2)
-    omega = holes.order_linear * p["hub_speed"]
-    return 2.0 * p["pin_damping_ratio"] * omega * m_eff * (g.pin_diameter / d_hole) ** 2
+    omega = holes.order_linear * p.hub_speed
+    return 2.0 * p.pin_damping_ratio * omega * m_eff * (g.pin_diameter / d_hole) ** 2
 
 
 @dataclass(frozen=True)
@@ -119,24 +132,24 @@ class AbsorberStart:
     velocity: NDArray[np.float64] = field(default_factory=lambda: np.zeros(3))
 
 
-def add_absorbers(model: Model, hub, carrier, holes: Holes, p: dict[str, Any],
+def add_absorbers(model: Model, hub, carrier, holes: Holes, p: Parameters, damping: float,
                   start: AbsorberStart | None = None) -> list[BifilarParts] | EquivalentParts:
     """The four absorbers on ``hub`` (spinning at ``hub_speed`` about +z, frame = identity at
-    t = 0, centre and state as ``start`` says) as ``p["bifilar"]`` says; the equivalent's
-    particle rides on ``carrier`` (non-rotating, d3 the rotor axis). Returns the bifilars'
-    parts or the equivalent's."""
-    omega = p["hub_speed"]
+    t = 0, centre and state as ``start`` says) as ``p.bifilar`` says, with the pin damping
+    ``damping`` (N·m·s/rad, :func:`pin_damping`); the equivalent's particle rides on
+    ``carrier`` (non-rotating, d3 the rotor axis). Returns the bifilars' parts or the
+    equivalent's."""
+    omega = p.hub_speed
     s = start if start is not None else AbsorberStart()
-    if p["bifilar"] == "equivalent":
+    if p.bifilar == "equivalent":
         # the same rolling resistance, as swing damping
-        absorber = equivalent_absorber(holes, N_BIFILARS, pin_damping(p, holes))
+        absorber = equivalent_absorber(holes, N_BIFILARS, damping)
         w0, wd0 = particle_state(absorber, omega, s.angles, s.rates, AZIMUTHS)
         return add_equivalent(model, carrier, hub, s.center, absorber, omega,
                               first_angle=FIRST_ANGLE, displacement=w0, rate=wd0)
-    locked = p["bifilar"] == "locked"
-    cp = 0.0 if locked else pin_damping(p, holes)
+    locked = p.bifilar == "locked"
     return [add_bifilar(model, hub, holes, 0.0 if locked else s.angles[i], angle=AZIMUTHS[i],
-                        prefix=f"b{i}_", omega=omega, locked=locked, pin_damping=cp,
+                        prefix=f"b{i}_", omega=omega, locked=locked, pin_damping=damping,
                         hub_center=s.center, hub_velocity=s.velocity,
                         rate=0.0 if locked else s.rates[i])
             for i in range(N_BIFILARS)]

@@ -26,7 +26,9 @@ remaining rotation (3 + 2 + 1 in-plane unknowns, 2 rolling relations: one degree
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Mapping
+from dataclasses import astuple, dataclass
+from functools import lru_cache
 from typing import Any
 
 import numpy as np
@@ -38,10 +40,10 @@ from solver.forces import RelativeRotation
 from solver.joints import Orientation, Revolute, Rigid
 from solver.model import Model
 from solver.rotations import rotation_about
-from solver.simulation import simulate
+from solver.simulation import simulate as simulate_model
 from studies.holes import SHAPES, Geometry, Holes, design
 from studies.measure import period_from_crossings
-from studies.parameters import ModelSpec, Output, Param, ParameterError
+from studies.parameters import ModelSpec, Output, Param, ParameterError, Parameters
 
 Z = np.array([0.0, 0.0, 1.0])
 
@@ -79,8 +81,9 @@ PARAMETERS: dict[str, Param] = {
                                          "cm_offset", "tuning_mass", "pin_mass",
                                          "pin_diameter", "pin_inertia")},
     "amplitude": Param(10.0, "degree", "release angle (pin angle φ for circles; turn of the "
-                       "path tangent from the vertex otherwise)", minimum=0.0, maximum=60.0),
-    "periods": Param(4.0, "1", "simulated duration in linear periods", minimum=1.0,
+                       "path tangent from the vertex otherwise)", minimum=0.0,
+                       exclusive_minimum=True, maximum=60.0),
+    "periods": Param(4.0, "1", "simulated duration in linear periods", minimum=2.0,
                      maximum=1000.0),
     "steps_per_period": Param(400, "1", "time steps per linear period", minimum=16,
                               maximum=100000),
@@ -112,19 +115,31 @@ OUTPUTS: dict[str, Output] = {
 }
 
 
-def geometry(p: dict[str, Any]) -> Geometry:
-    return Geometry(p["arm_radius"], p["cm_offset"], p["pin_diameter"], p["tuning_mass"],
-                    p["pin_mass"], p["pin_inertia"])
+def geometry(p: Parameters) -> Geometry:
+    """The bifilar hardware of a parameter set that declares :data:`HARDWARE`."""
+    return Geometry(p.arm_radius, p.cm_offset, p.pin_diameter, p.tuning_mass, p.pin_mass,
+                    p.pin_inertia)
 
 
-def holes_for(p: dict[str, Any]) -> Holes:
-    """The designed holes for a parameter set (validates the geometry)."""
-    if p["hole_diameter"] > 0:
-        return design(p["hole"], geometry(p), hole_diameter=p["hole_diameter"])
-    return design(p["hole"], geometry(p), tuning_order=p["tuning_order"])
+def holes_for(p: Parameters) -> Holes:
+    """The pendulum's designed holes: of ``hole_diameter`` if given, else sized for
+    ``tuning_order`` (raises ParameterError for impossible geometry). A pendulum case's
+    derived design is its holes alone: its run and its validation share them
+    (:func:`_designed`)."""
+    if p.hole_diameter > 0:
+        return _designed(p.hole, None, p.hole_diameter, *astuple(geometry(p)))
+    return _designed(p.hole, p.tuning_order, None, *astuple(geometry(p)))
 
 
-def check(p: dict[str, Any]) -> None:
+@lru_cache(maxsize=64)
+def _designed(hole: str, tuning_order: float | None, hole_diameter: float | None,
+              *hardware: float) -> Holes:
+    return design(hole, Geometry(*hardware), tuning_order=tuning_order,
+                  hole_diameter=hole_diameter)
+
+
+def check(p: Parameters) -> None:
+    """The geometry must admit the holes (raises ParameterError)."""
     holes_for(p)
 
 
@@ -246,34 +261,40 @@ def pin_angle(system, parts: BifilarParts, hub, q: np.ndarray) -> float:
     return float(np.arctan2(-t[0], t[1]))
 
 
-def build(p: dict[str, Any]):
-    """Hub spinning at Ω (prescribed) with one bifilar released at the given amplitude."""
-    holes = holes_for(p)
+def build(p: Parameters, holes: Holes | None = None):
+    """Hub spinning at Ω (prescribed) with one bifilar released at the given amplitude, in
+    ``holes`` (default :func:`holes_for`'s)."""
+    holes = holes_for(p) if holes is None else holes
     model = Model()
-    hub = spinning("hub", p["hub_speed"])
+    hub = spinning("hub", p.hub_speed)
     model.add(hub)
-    parts = add_bifilar(model, hub, holes, np.radians(p["amplitude"]), omega=p["hub_speed"],
-                        pin_damping=p["pin_damping"])
+    parts = add_bifilar(model, hub, holes, np.radians(p.amplitude), omega=p.hub_speed,
+                        pin_damping=p.pin_damping)
     return model, hub, parts
 
 
-def run(params: dict[str, Any]) -> xr.Dataset:
+def run(given: Mapping[str, Any] | Parameters = ()) -> xr.Dataset:
+    """One pendulum case from its parameters (validated here unless they are the pendulum's
+    :class:`~studies.parameters.Parameters` already): see :func:`simulate`."""
+    return simulate(SPEC.validate(given))
+
+
+def simulate(p: Parameters) -> xr.Dataset:
     """Simulate the free response and measure the tuning order ω/Ω."""
     from solver.system import System
 
-    p = SPEC.complete(params)
     model, hub, parts = build(p)
-    omega = p["hub_speed"]
+    omega = p.hub_speed
     order_lin = parts.holes.order_linear
     t_lin = 2 * np.pi / (order_lin * omega)
-    h = t_lin / p["steps_per_period"]
+    h = t_lin / p.steps_per_period
     sysm = System(model)
     # The midpoint rule turns the hub by Δψ with 2 tan(Δψ/2) = Ω̃ h per step in Cayley form,
     # so its discrete Jacobi integral is T + V − Ω̃ L_z with Ω̃ = 2 tan(Ω h/2)/h (→ Ω as
     # h → 0). Without pin inertia it is constant to roundoff; the pins' spin adds a bounded
     # O(h² A²) oscillation (1e-12 at 1°, 4e-9 at 30° with the defaults). Exactly constant is
     # the energy minus the work of the hub driver, recorded as ``energy_balance``.
-    omega_j = 2.0 * np.tan(0.5 * omega * h) / h if p["scheme"] == "ep" else omega
+    omega_j = 2.0 * np.tan(0.5 * omega * h) / h if p.scheme == "ep" else omega
     rec: dict[str, list] = {k: [] for k in ("t", "phi", "x", "y", "jacobi", "roll", "viol",
                                               "balance")}
     prev = {"q": None}
@@ -290,7 +311,7 @@ def run(params: dict[str, Any]) -> xr.Dataset:
         energy = sysm.kinetic(v) + sysm.potential(q)
         rec["jacobi"].append(energy - omega_j * lz)
         rec["balance"].append(energy - integ.work)
-        if p["scheme"] == "ep":  # what EP enforces: A(q_m)(q_f − q_i)/h = 0
+        if p.scheme == "ep":  # what EP enforces: A(q_m)(q_f − q_i)/h = 0
             if prev["q"] is not None:
                 dq = q - prev["q"]
                 rec["roll"].append(sysm.nonholonomic_residual(prev["q"] + 0.5 * dq, dq) / h)
@@ -301,13 +322,13 @@ def run(params: dict[str, Any]) -> xr.Dataset:
         rec["viol"].append(integ.violation())
         prev["q"] = q.copy()
 
-    sim = simulate(model, p["periods"] * t_lin, h, scheme=p["scheme"], reactions=False,
+    sim = simulate_model(model, p.periods * t_lin, h, scheme=p.scheme, reactions=False,
                    record_every=10**9, system=sysm, callback=record, record_initial=True)
     t = np.array(rec["t"])
     phi = np.degrees(np.array(rec["phi"]))
     period = period_from_crossings(t, phi, center=0.0) if sim.converged else float("nan")
     order = 2 * np.pi / period / omega if np.isfinite(period) else float("nan")
-    attrs = dict(p)
+    attrs = p.as_dict()
     attrs.update({f"hole_{k}": float(v) for k, v in parts.holes.params.items()})
     attrs.update(converged=int(sim.converged), message=sim.message,
                  solver_seconds=sim.seconds, time_step=h)
@@ -326,13 +347,13 @@ def run(params: dict[str, Any]) -> xr.Dataset:
     }, attrs)
 
 
-def _check_params(p: dict[str, Any]) -> None:
-    if p["hole_diameter"] > 0 and p["hole"] != "circle":
+def _check_params(p: Parameters) -> None:
+    if p.hole_diameter > 0 and p.hole != "circle":
         raise ParameterError("hole_diameter applies to circular holes; give tuning_order for "
-                             f"hole = {p['hole']!r}")
+                             f"hole = {p.hole!r}")
     check(p)
 
 
-SPEC = ModelSpec("pendulum", PARAMETERS, run, _check_params,
+SPEC = ModelSpec("pendulum", PARAMETERS, simulate, _check_params,
                  description="one bifilar pendulum on a hub spinning at constant speed",
                  outputs=OUTPUTS)

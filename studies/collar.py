@@ -10,6 +10,7 @@ errata.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
@@ -21,10 +22,10 @@ from solver.curves import circle, cycloid
 from solver.forces import Gravity
 from solver.model import Model
 from solver.rotations import rotation_about
-from solver.simulation import simulate
+from solver.simulation import simulate as simulate_model
 from studies.analytic import collar_circle_period, collar_cycloid_period
 from studies.measure import period_from_crossings
-from studies.parameters import ModelSpec, Output, Param, ParameterError
+from studies.parameters import ModelSpec, Output, Param, ParameterError, Parameters
 
 PARAMETERS: dict[str, Param] = {
     "curve": Param("circle", "1", "curve the collar slides on", choices=("circle", "cycloid")),
@@ -41,7 +42,7 @@ PARAMETERS: dict[str, Param] = {
     "scheme": Param("ep", "1", "time integration scheme", choices=("ep", "ed", "galpha")),
     "steps_per_period": Param(1000, "1", "time steps per analytic period", minimum=8,
                               maximum=100000),
-    "periods": Param(2.0, "1", "simulated duration in analytic periods", minimum=1.0,
+    "periods": Param(2.0, "1", "simulated duration in analytic periods", minimum=2.0,
                      maximum=1000.0),
 }
 
@@ -63,54 +64,59 @@ OUTPUTS: dict[str, Output] = {
 }
 
 
-def check(p: dict[str, Any]) -> None:
+def check(p: Parameters) -> None:
     """Cross-parameter validity: the release point must lie on the curve."""
-    if p["curve"] == "cycloid" and not p["theta0"] < 90.0:
-        raise ParameterError(f"theta0 = {p['theta0']:g} degree: on the cycloid the tangent "
+    if p.curve == "cycloid" and not p.theta0 < 90.0:
+        raise ParameterError(f"theta0 = {p.theta0:g} degree: on the cycloid the tangent "
                              "angle must be in (0, 90) degree (90 is the cusp)")
 
 
-def analytic_period(p: dict[str, Any]) -> float:
-    th = np.radians(p["theta0"])
-    if p["curve"] == "circle":
-        return collar_circle_period(p["radius"], p["gravity"], th, p["mass"], p["inertia"])
-    return collar_cycloid_period(p["cycloid_a"], p["gravity"], th, p["mass"], p["inertia"])
+def analytic_period(p: Parameters) -> float:
+    th = np.radians(p.theta0)
+    if p.curve == "circle":
+        return collar_circle_period(p.radius, p.gravity, th, p.mass, p.inertia)
+    return collar_cycloid_period(p.cycloid_a, p.gravity, th, p.mass, p.inertia)
 
 
-def build(p: dict[str, Any]) -> tuple[Model, CurveSliding, RigidBody | PointMass]:
+def build(p: Parameters) -> tuple[Model, CurveSliding, RigidBody | PointMass]:
     """The collar model: ground carrying the curve, the collar, the joint, gravity (−y)."""
-    th = np.radians(p["theta0"])
+    th = np.radians(p.theta0)
     g0 = ground()
-    if p["curve"] == "circle":
-        r = p["radius"]
+    if p.curve == "circle":
+        r = p.radius
         # seam of the closed NURBS circle at the top, lowest point at η = 1/2
         curve = circle(r, start_angle=0.5 * np.pi)
         pos = np.array([r * np.sin(th), -r * np.cos(th), 0.0])
     else:
-        a = p["cycloid_a"]
+        a = p.cycloid_a
         curve = cycloid(a)
         t = 2.0 * th  # tangent angle φ = t/2 on the paper's cycloid
         pos = np.array([a * (t + np.sin(t)), -a * (1.0 + np.cos(t)), 0.0])
-    if p["inertia"] > 0.0:
-        ip = p["inertia"]
-        collar = RigidBody("collar", p["mass"], inertia=(0.5 * ip, 0.5 * ip, ip), position=pos,
+    if p.inertia > 0.0:
+        ip = p.inertia
+        collar = RigidBody("collar", p.mass, inertia=(0.5 * ip, 0.5 * ip, ip), position=pos,
                            orientation=rotation_about((0, 0, 1), th))
         joint = CurveSliding("slide", g0, curve, collar, rotation=True)
     else:
-        collar = PointMass("collar", p["mass"], position=pos)
+        collar = PointMass("collar", p.mass, position=pos)
         joint = CurveSliding("slide", g0, curve, collar)
     model = Model()
-    model.add(g0, collar, joint, ArcLength(joint), Gravity((0.0, -p["gravity"], 0.0)))
+    model.add(g0, collar, joint, ArcLength(joint), Gravity((0.0, -p.gravity, 0.0)))
     return model, joint, collar
 
 
-def run(params: dict[str, Any]) -> xr.Dataset:
+def run(given: Mapping[str, Any] | Parameters = ()) -> xr.Dataset:
+    """One collar case from its parameters (validated here unless they are the collar's
+    :class:`~studies.parameters.Parameters` already): see :func:`simulate`."""
+    return simulate(SPEC.validate(given))
+
+
+def simulate(p: Parameters) -> xr.Dataset:
     """Simulate one release and return its time histories and the measured period."""
-    p = SPEC.complete(params)
     model, joint, _ = build(p)
     t_ref = analytic_period(p)
-    h = t_ref / p["steps_per_period"]
-    sim = simulate(model, p["periods"] * t_ref, h, scheme=p["scheme"], reactions=False)
+    h = t_ref / p.steps_per_period
+    sim = simulate_model(model, p.periods * t_ref, h, scheme=p.scheme, reactions=False)
     ds = sim.dataset
     eta = ds.scalar_value.sel(scalar="slide.eta").values
     s_arc = ds.scalar_value.sel(scalar="slide.s").values
@@ -119,7 +125,7 @@ def run(params: dict[str, Any]) -> xr.Dataset:
     t = ds.time.values
     period = period_from_crossings(t, theta, center=0.0) if sim.converged else float("nan")
     e = ds.energy.values
-    attrs = {k: (str(v) if isinstance(v, bool) else v) for k, v in p.items()}
+    attrs = {k: (str(v) if isinstance(v, bool) else v) for k, v in p.as_dict().items()}
     attrs.update(converged=int(sim.converged), message=sim.message,
                  solver_seconds=sim.seconds, time_step=h)
     return SPEC.dataset({
@@ -136,6 +142,6 @@ def run(params: dict[str, Any]) -> xr.Dataset:
     }, attrs)
 
 
-SPEC = ModelSpec("collar", PARAMETERS, run, check,
+SPEC = ModelSpec("collar", PARAMETERS, simulate, check,
                  description="collar sliding on a circle or cycloid (paper Figs. 10-12)",
                  outputs=OUTPUTS)

@@ -38,10 +38,13 @@ extrapolated to zero step (:func:`studies.periodic.richardson`).
 from __future__ import annotations
 
 import time
+from collections.abc import Mapping
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 import xarray as xr
+from numpy.typing import NDArray
 
 from solver.bodies import RigidBody, ground
 from solver.composition import COMPOSITIONS, Composed
@@ -66,8 +69,8 @@ from studies.absorbers import OUTPUTS as ABSORBER_OUTPUTS
 from studies.absorbers import PARAMETERS as ABSORBERS
 from studies.equivalent import equivalent_absorber
 from studies.harmonics import N_MAX
-from studies.holes import MAX_TANGENT_ANGLE
-from studies.parameters import ModelSpec, Output, Param, ParameterError
+from studies.holes import MAX_TANGENT_ANGLE, Holes
+from studies.parameters import ModelSpec, Output, Param, ParameterError, Parameters
 from studies.periodic import march, richardson, sector_response, shoot, stepper, to_rotating
 from studies.reduced_hub import (
     SAMPLES,
@@ -129,7 +132,7 @@ PARAMETERS: dict[str, Param] = {
                            "or rest (hub centred, bifilars at rest at their vertex)",
                            choices=("linear", "nonlinear", "rest")),
     "steps_per_rev": Param(40, "1", "time steps per revolution (each of them `composition`'s "
-                           "substeps)", minimum=16, maximum=20000),
+                           "substeps)", minimum=20, maximum=20000),
     "composition": Param("suzuki", "1", "symmetric composition of the ep step into a "
                          "fourth-order step: suzuki (5 substeps), yoshida (3), or none (the "
                          "plain second-order ep step)", choices=(*COMPOSITIONS, "none")),
@@ -159,42 +162,87 @@ PARAMETERS: dict[str, Param] = {
 OUTPUTS: dict[str, Output] = ABSORBER_OUTPUTS
 
 
-def check(p: dict[str, Any]) -> None:
+def check(p: Parameters) -> None:
     """Geometry must admit holes of the requested order, and shooting on the quarter-revolution
     map needs whole quarter revolutions of steps (raises ParameterError)."""
     holes_for(p)
-    if p["composition"] == "none" and p["steps_per_rev"] < PLAIN_MIN_STEPS:
-        raise ParameterError(f"steps_per_rev = {p['steps_per_rev']}: must be at least "
+    if p.composition == "none" and p.steps_per_rev < PLAIN_MIN_STEPS:
+        raise ParameterError(f"steps_per_rev = {p.steps_per_rev}: must be at least "
                              f"{PLAIN_MIN_STEPS} with composition = 'none' (the plain "
                              "second-order step errs by 13 % at 80 steps/rev)")
     # shooting steps whole quarter revolutions (the coarser step of the estimate too:
     # periodic.coarser_steps)
-    if p["shooting_window"] and p["steps_per_rev"] % N_BIFILARS:
-        raise ParameterError(f"steps_per_rev = {p['steps_per_rev']}: must be a multiple of "
+    if p.shooting_window and p.steps_per_rev % N_BIFILARS:
+        raise ParameterError(f"steps_per_rev = {p.steps_per_rev}: must be a multiple of "
                              f"{N_BIFILARS} (shooting on the quarter-revolution map steps whole "
                              "quarter revolutions)")
 
 
-def fuselage(p: dict[str, Any]) -> tuple[float, float]:
+def total_mass(p: Parameters) -> float:
+    """The in-plane mass on the fuselage restraint (kg): shaft head, rotor and bifilars."""
+    m_bif = p.tuning_mass + 2 * p.pin_mass
+    return p.shaft_mass + p.rotor_mass + N_BIFILARS * m_bif
+
+
+def fuselage(p: Parameters) -> tuple[float, float]:
     """The fuselage restraint's in-plane stiffness (N/m) and damping (N·s/m)."""
-    m_bif = p["tuning_mass"] + 2 * p["pin_mass"]
-    m_tot = p["shaft_mass"] + p["rotor_mass"] + N_BIFILARS * m_bif
     # damping fixed by the nominal mode so that the stiffness scale changes stiffness only
-    c = 2 * p["fuselage_damping_ratio"] * np.sqrt(p["fuselage_stiffness"] * m_tot)
-    return p["fuselage_stiffness"] * p["fuselage_stiffness_scale"], c
+    c = 2 * p.fuselage_damping_ratio * np.sqrt(p.fuselage_stiffness * total_mass(p))
+    return p.fuselage_stiffness * p.fuselage_stiffness_scale, c
 
 
-def excitation(p: dict[str, Any]) -> tuple[np.ndarray, np.ndarray]:
+def excitation(p: Parameters) -> tuple[np.ndarray, np.ndarray]:
     """The blade shears in the fixed frame, f = Σ F_j e^{iω_j t} (complex in-plane components):
     the whirl frequencies ω_j (rad/s; the rotating 3P at +4Ω, the rotating 5P at −4Ω) and the
     complex amplitudes F_j (N)."""
-    omega = p["hub_speed"]
+    omega = p.hub_speed
     return (omega * np.array([1.0 + 3.0, 1.0 - 5.0]),
-            np.array([p["excitation_3p"] * np.exp(1j * np.radians(p["phase_3p"])),
-                      p["excitation_5p"] * np.exp(-1j * np.radians(p["phase_5p"]))]))
+            np.array([p.excitation_3p * np.exp(1j * np.radians(p.phase_3p)),
+                      p.excitation_5p * np.exp(-1j * np.radians(p.phase_5p))]))
 
 
-def linear_response(p: dict[str, Any], holes) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+@dataclass(frozen=True)
+class HubDesign:
+    """What a hub case derives from its parameters, once (:func:`design`): everything the
+    model, its starts and its reduced equations are built from.
+
+    Attributes
+    ----------
+    holes
+        The bifilars' tracking holes (:func:`studies.absorbers.holes_for`).
+    fuselage_stiffness, fuselage_damping
+        The fuselage restraint's in-plane stiffness (N/m, scaled by
+        ``fuselage_stiffness_scale``) and damping (N·s/m, from the nominal mode).
+    pin_damping
+        Rotational damping on each pin's rotation relative to its link (N·m·s/rad; zero for
+        locked bifilars).
+    total_mass
+        In-plane mass on the fuselage restraint (kg): shaft head, rotor and bifilars.
+    whirl, force
+        The blade shears in the fixed frame, f = Σ F_j e^{iω_j t}: whirl frequencies ω_j
+        (rad/s) and complex amplitudes F_j (N) (:func:`excitation`).
+    """
+
+    holes: Holes
+    fuselage_stiffness: float
+    fuselage_damping: float
+    pin_damping: float
+    total_mass: float
+    whirl: NDArray[np.float64]
+    force: NDArray[np.complex128]
+
+
+def design(p: Parameters) -> HubDesign:
+    """The derived design of a hub case: holes, fuselage restraint, pin dampers, shears."""
+    holes = holes_for(p)
+    k, c = fuselage(p)
+    whirl, force = excitation(p)
+    return HubDesign(holes=holes, fuselage_stiffness=float(k), fuselage_damping=float(c),
+                     pin_damping=pin_damping(p, holes), total_mass=total_mass(p),
+                     whirl=whirl, force=force)
+
+
+def linear_response(p: Parameters, d: HubDesign) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The periodic response of the linearized hub model, in closed form: per tone of the
     shears (:func:`excitation`) its whirl frequency ω (rad/s), the hub's whirl amplitude Z (m,
     complex: z = Σ Z e^{iωt}, fixed frame) and the bifilars' swing whirl amplitude Â (rad:
@@ -209,13 +257,12 @@ def linear_response(p: dict[str, Any], holes) -> tuple[np.ndarray, np.ndarray, n
     undamped absorber tuned to a tone (D = 0), which then cancels it (Z = 0,
     Â = 2iF/(ω² N B)). Not finite only at an undamped resonance of the coupled system.
     """
-    omega = p["hub_speed"]
-    whirl, force = excitation(p)
-    k, c = fuselage(p)
-    locked = p["bifilar"] == "locked"
-    absorber = equivalent_absorber(holes, N_BIFILARS, 0.0 if locked else pin_damping(p, holes))
-    k0 = k + 1j * whirl * c - whirl**2 * (p["shaft_mass"] + p["rotor_mass"]
-                                          + absorber.total_mass)
+    omega = p.hub_speed
+    whirl, force = d.whirl, d.force
+    k, c = d.fuselage_stiffness, d.fuselage_damping
+    locked = p.bifilar == "locked"
+    absorber = equivalent_absorber(d.holes, N_BIFILARS, d.pin_damping)
+    k0 = k + 1j * whirl * c - whirl**2 * (p.shaft_mass + p.rotor_mass + absorber.total_mass)
     if locked:
         return whirl, force / k0, np.zeros(len(whirl), dtype=complex)
     num, den = absorber.swing_terms(omega, whirl)
@@ -223,69 +270,66 @@ def linear_response(p: dict[str, Any], holes) -> tuple[np.ndarray, np.ndarray, n
     return whirl, force * den / delta, force * num / delta
 
 
-def linear_start(p: dict[str, Any], holes) -> AbsorberStart:
+def linear_start(p: Parameters, d: HubDesign) -> AbsorberStart:
     """The state at t = 0 of :func:`linear_response`: the hub centre's position and
     velocity, each bifilar's pin angle φ_k = Re(A e^{−iψ_k}) and rate
     Re((Ȧ − iΩA) e^{−iψ_k}). What the linearization leaves out (amplitude detuning, the hole
     shape beyond its vertex curvature) is the transient the shooting removes."""
-    whirl, zz, aa = linear_response(p, holes)
+    whirl, zz, aa = linear_response(p, d)
     z0, zd0 = zz.sum(), (1j * whirl * zz).sum()
     a0, ad0 = aa.sum(), (1j * whirl * aa).sum()
     rot = np.exp(-1j * AZIMUTHS)  # e^{−iψ_k} at t = 0
     return AbsorberStart(angles=np.real(a0 * rot),
-                         rates=np.real((ad0 - 1j * p["hub_speed"] * a0) * rot),
+                         rates=np.real((ad0 - 1j * p.hub_speed * a0) * rot),
                          center=np.array([z0.real, z0.imag, 0.0]),
                          velocity=np.array([zd0.real, zd0.imag, 0.0]))
 
 
-def reduced_model(p: dict[str, Any], holes) -> ReducedHub:
+def reduced_model(p: Parameters, d: HubDesign) -> ReducedHub:
     """The hub model on swing coordinates (:mod:`studies.reduced_hub`): the same masses,
     fuselage restraint, shears and rolling resistance as :func:`build`'s."""
-    g = holes.geometry
-    k, c = fuselage(p)
-    whirl, force = excitation(p)
-    m_z = (p["shaft_mass"] + p["rotor_mass"]
-           + N_BIFILARS * (g.tuning_mass + 2 * g.pin_mass))
-    return ReducedHub(holes, p["hub_speed"], AZIMUTHS, m_z, k, c, whirl, force,
-                      pin_damping(p, holes))
+    return ReducedHub(d.holes, p.hub_speed, AZIMUTHS, d.total_mass, d.fuselage_stiffness,
+                      d.fuselage_damping, d.whirl, d.force, d.pin_damping)
 
 
-def reduced_response(p: dict[str, Any], holes, **kw) -> PeriodicSwing:
+def reduced_response(p: Parameters, d: HubDesign, **kw) -> PeriodicSwing:
     """The periodic response of :func:`reduced_model` by harmonic balance
     (:func:`studies.reduced_hub.periodic_swing`, options ``kw``), from :func:`linear_response`
     (σ ≈ φ/φ'(0): the linear response knows only the vertex). Raises RuntimeError if the
     balance does not converge."""
-    omega = p["hub_speed"]
+    omega = p.hub_speed
     m = kw.get("samples", SAMPLES)
     t = 2 * np.pi / omega * np.arange(m) / m
-    whirl, _, aa = linear_response(p, holes)
+    whirl, _, aa = linear_response(p, d)
     phi0 = np.real((aa[:, None] * np.exp(1j * np.outer(whirl, t))).sum(axis=0)
                    * np.exp(-1j * (omega * t + AZIMUTHS[0])))
-    return periodic_swing(reduced_model(p, holes),
-                          phi0 / tangent_angle(holes, np.zeros(1))[1][0], **kw)
+    return periodic_swing(reduced_model(p, d),
+                          phi0 / tangent_angle(d.holes, np.zeros(1))[1][0], **kw)
 
 
-def reduced_samples(p: dict[str, Any], holes, t: np.ndarray, **kw) -> np.ndarray:
+def reduced_samples(p: Parameters, d: HubDesign, t: np.ndarray, **kw) -> np.ndarray:
     """The run's sampled rows at times ``t`` (s) — time, hub centre x, y (m) and the force on
     the fuselage x, y (N), fixed frame; the tuning masses' centre of mass x, y (m); the pin
     angles (degree) — from :func:`reduced_response`: the exact equations' periodic response, a
     reference for :func:`run`'s that shares none of its numerics."""
-    sol = reduced_response(p, holes, **kw)
-    k, c = fuselage(p)
+    sol = reduced_response(p, d, **kw)
+    holes = d.holes
+    k, c = d.fuselage_stiffness, d.fuselage_damping
     z, zd = sol.center(t), sol.center(t, derivative=1)
     f = k * z + c * zd
     sigmas = [sol.sigma(t, k=j) for j in range(N_BIFILARS)]
-    cm = z + np.mean([np.exp(1j * (p["hub_speed"] * t + a)) * path_terms(holes, s)[0]
+    cm = z + np.mean([np.exp(1j * (p.hub_speed * t + a)) * path_terms(holes, s)[0]
                       for a, s in zip(AZIMUTHS, sigmas, strict=True)], axis=0)
     pins = [np.degrees(tangent_angle(holes, s)[0]) for s in sigmas]
     return np.column_stack([t, z.real, z.imag, f.real, f.imag, cm.real, cm.imag, *pins])
 
 
-def nonlinear_start(p: dict[str, Any], holes) -> tuple[AbsorberStart, float]:
+def nonlinear_start(p: Parameters, d: HubDesign) -> tuple[AbsorberStart, float]:
     """The state at t = 0 of :func:`reduced_response`, and the largest pin angle over its
     revolution (rad). Raises RuntimeError if the balance does not converge."""
-    omega = p["hub_speed"]
-    sol = reduced_response(p, holes)
+    omega = p.hub_speed
+    holes = d.holes
+    sol = reduced_response(p, d)
     t0 = np.zeros(1)
     angles, rates = [], []
     for j in range(N_BIFILARS):
@@ -300,20 +344,20 @@ def nonlinear_start(p: dict[str, Any], holes) -> tuple[AbsorberStart, float]:
                          velocity=np.array([zd0.real, zd0.imag, 0.0])), swing
 
 
-def initial_start(p: dict[str, Any], holes) -> tuple[AbsorberStart, str]:
+def initial_start(p: Parameters, d: HubDesign) -> tuple[AbsorberStart, str]:
     """The state the run starts from as ``initial_state`` says, and what the case message
     should say about it: the nonlinear start where the harmonic balance converges with every
     pin within :data:`NONLINEAR_START_LIMIT`, else the linear one; the linear start only where
     the linearization holds — finite, and every pin within :data:`LINEAR_START_LIMIT` and on
     its hole — else rest."""
-    if p["initial_state"] == "rest":
+    if p.initial_state == "rest":
         return AbsorberStart(), ""
     note = ""
-    if p["initial_state"] == "nonlinear" and p["bifilar"] == "free":
+    if p.initial_state == "nonlinear" and p.bifilar == "free":
         # (locked bifilars and the equivalent are linear: their linear start is exact)
         try:
             with np.errstate(all="ignore"):
-                start, swing = nonlinear_start(p, holes)
+                start, swing = nonlinear_start(p, d)
         except RuntimeError as exc:
             note = f"nonlinear start not found ({exc})"
         else:
@@ -321,16 +365,16 @@ def initial_start(p: dict[str, Any], holes) -> tuple[AbsorberStart, str]:
                 return start, ""
             note = (f"nonlinear start not used: it swings the pins to {np.degrees(swing):.3g}°, "
                     f"beyond the {np.degrees(NONLINEAR_START_LIMIT):g}° the holes cover")
-    start, reason = _linear_start_checked(p, holes)
+    start, reason = _linear_start_checked(p, d)
     if note and not reason:
         reason = "started from the linear response"
     return start, "; ".join(x for x in (note, reason) if x)
 
 
-def _linear_start_checked(p: dict[str, Any], holes) -> tuple[AbsorberStart, str]:
+def _linear_start_checked(p: Parameters, d: HubDesign) -> tuple[AbsorberStart, str]:
     """The linear start where the linearization holds, else rest and why."""
     with np.errstate(all="ignore"):  # a non-finite response is reported, not warned about
-        start = linear_start(p, holes)
+        start = linear_start(p, d)
     values = np.concatenate([start.angles, start.rates, start.center, start.velocity])
     if not np.all(np.isfinite(values)):
         return AbsorberStart(), ("started at rest: the linear response is not finite (an "
@@ -342,7 +386,7 @@ def _linear_start_checked(p: dict[str, Any], holes) -> tuple[AbsorberStart, str]
     else:
         try:
             for a in (big, -big):
-                holes.sigma_of_angle(a)
+                d.holes.sigma_of_angle(a)
         except ParameterError:
             reach = "beyond the end of the holes"
     if reach:
@@ -351,27 +395,27 @@ def _linear_start_checked(p: dict[str, Any], holes) -> tuple[AbsorberStart, str]
     return start, ""
 
 
-def build(p: dict[str, Any], holes=None, start: AbsorberStart | None = None):
-    """The hub model: (model, hub, shaft, parts, holes, (k, c)) with handles for outputs;
-    ``parts`` is the list of :class:`BifilarParts` or, for ``bifilar = "equivalent"``, the
-    :class:`studies.equivalent.EquivalentParts`. ``holes`` and ``start`` (the state at t = 0)
-    default to :func:`studies.absorbers.holes_for` and :func:`initial_start`'s."""
-    omega = p["hub_speed"]
-    holes = holes_for(p) if holes is None else holes
+def build(p: Parameters, d: HubDesign | None = None, start: AbsorberStart | None = None):
+    """The hub model: (model, hub, shaft, parts) with handles for outputs; ``parts`` is the
+    list of :class:`BifilarParts` or, for ``bifilar = "equivalent"``, the
+    :class:`studies.equivalent.EquivalentParts`. ``d`` (the derived design) and ``start`` (the
+    state at t = 0) default to :func:`design`'s and :func:`initial_start`'s."""
+    omega = p.hub_speed
+    d = design(p) if d is None else d
     if start is None:
-        start, _ = initial_start(p, holes)
+        start, _ = initial_start(p, d)
     x0, v0 = start.center, start.velocity
     g0 = ground()
-    shaft = RigidBody("shaft", p["shaft_mass"], inertia=(1.0, 1.0, 1.0), position=x0,
+    shaft = RigidBody("shaft", p.shaft_mass, inertia=(1.0, 1.0, 1.0), position=x0,
                       velocity=v0)
     # The rotor's speed is prescribed, so its polar inertia only sets the driving torque, not
     # the motion; it is left out (a unit inertia keeps the hub's rotation well posed). With the
     # real 1e4 kg·m² the midpoint rule's two-step velocity mode of the driven rotation, of
     # relative size (Ωh)², would show up as a large alternating driving torque and slow Newton.
-    hub = RigidBody("hub", p["rotor_mass"], inertia=(1.0, 1.0, 1.0), position=x0,
+    hub = RigidBody("hub", p.rotor_mass, inertia=(1.0, 1.0, 1.0), position=x0,
                     velocity=v0, angular_velocity=omega * Z)
-    k, c = fuselage(p)
-    whirl, force = excitation(p)
+    k, c = d.fuselage_stiffness, d.fuselage_damping
+    whirl, force = d.whirl, d.force
 
     def shear(t: float) -> np.ndarray:
         fixed = force @ np.exp(1j * whirl * t)
@@ -387,25 +431,31 @@ def build(p: dict[str, Any], holes=None, start: AbsorberStart | None = None):
               Spring("fuselage", None, shaft, point=x0, stiffness=np.diag([k, k, 0.0]),
                      damping=np.diag([c, c, 0.0]), rest=-x0),
               AppliedLoad("blade_shears", hub, force=shear))
-    parts = add_absorbers(model, hub, shaft, holes, p, start)
-    return model, hub, shaft, parts, holes, (k, c)
+    parts = add_absorbers(model, hub, shaft, d.holes, p, d.pin_damping, start)
+    return model, hub, shaft, parts
 
 
-def run(params: dict[str, Any]) -> xr.Dataset:
+def run(given: Mapping[str, Any] | Parameters = ()) -> xr.Dataset:
+    """One hub case from its parameters (validated here unless they are the hub's
+    :class:`~studies.parameters.Parameters` already): see :func:`simulate`."""
+    return simulate(SPEC.validate(given))
+
+
+def simulate(p: Parameters) -> xr.Dataset:
     """Reach the periodic response (shooting or marching) and record whole revolutions; then
     estimate the harmonics' time-step error from the periodic response at a coarser step
     and, with ``richardson``, extrapolate them to zero step (see the module docstring)."""
-    p = SPEC.complete(params)
-    holes = holes_for(p)
+    d = design(p)
     # the start, and what the case message says of it (that it is rest, and why)
-    start, start_note = initial_start(p, holes)
-    model, hub, shaft, parts, holes, (k, c) = build(p, holes, start)
-    omega = p["hub_speed"]
-    nrev = p["steps_per_rev"]
+    start, start_note = initial_start(p, d)
+    model, hub, shaft, parts = build(p, d, start)
+    k, c = d.fuselage_stiffness, d.fuselage_damping
+    omega = p.hub_speed
+    nrev = p.steps_per_rev
     sysm = System(model)
     os_ = sysm.offset[shaft]
     absorbers = AbsorberProbe(sysm, parts, hub)
-    sym = symmetry(sysm, hub, shaft, parts) if p["shooting_window"] else None
+    sym = symmetry(sysm, hub, shaft, parts) if p.shooting_window else None
 
     def integrator(n: int):
         """The time integration at n steps per revolution."""
@@ -413,7 +463,7 @@ def run(params: dict[str, Any]) -> xr.Dataset:
         # measured on the free case, 1e-8 instead of 1e-11 moves every archived output by
         # ≤ 4e-10 of its scale and takes 3.13 → 2.26 Newton iterations per step
         integ = make_integrator(sysm, "ep", 2 * np.pi / omega / n, tol=NEWTON_TOL)
-        return integ if p["composition"] == "none" else Composed(integ, p["composition"])
+        return integ if p.composition == "none" else Composed(integ, p.composition)
 
     def sampler(integ):
         def sample() -> np.ndarray:
@@ -450,24 +500,24 @@ def run(params: dict[str, Any]) -> xr.Dataset:
     hint = "raise max_revolutions or pin_damping_ratio"
     if sym is not None:
         rec = shoot(integ, sampler(integ), signals, observe=observe, symmetry=sym,
-                    system=sysm, steps_per_rev=nrev, revolutions=p["revolutions"],
-                    max_revolutions=p["max_revolutions"], tolerance=p["periodic_tolerance"],
-                    window=p["shooting_window"], max_restarts=p["shooting_restarts"],
+                    system=sysm, steps_per_rev=nrev, revolutions=p.revolutions,
+                    max_revolutions=p.max_revolutions, tolerance=p.periodic_tolerance,
+                    window=p.shooting_window, max_restarts=p.shooting_restarts,
                     secant=True, hint=hint)
     else:
         rec = march(stepper(integ, omega), sampler(integ), signals, steps_per_rev=nrev,
-                    revolutions=p["revolutions"], max_revolutions=p["max_revolutions"],
-                    tolerance=p["periodic_tolerance"], hint=hint,
-                    window=p["extrapolation_window"])
+                    revolutions=p.revolutions, max_revolutions=p.max_revolutions,
+                    tolerance=p.periodic_tolerance, hint=hint,
+                    window=p.extrapolation_window)
     data = rec.samples
     runs = [(integ, nrev)]
     notes = [note for note in (start_note, rec.note) if note]
     step_error = float("nan")
     n_c = periodic.coarser_steps(nrev, n_sec, N_MAX)
     extrapolated = False
-    wanted = p["error_estimate"] or p["richardson"]
+    wanted = p.error_estimate or p.richardson
     # what a case message adds when the estimate fails: the extrapolation, if it was asked for
-    unextrapolated = ", harmonics not extrapolated" if p["richardson"] else ""
+    unextrapolated = ", harmonics not extrapolated" if p.richardson else ""
     if wanted and n_c is None:
         notes.append(f"no step-error estimate at steps_per_rev = {nrev}{unextrapolated}: a "
                      f"coarser step would not resolve harmonic {N_MAX}")
@@ -493,12 +543,12 @@ def run(params: dict[str, Any]) -> xr.Dataset:
             notes.append(f"no step-error estimate{unextrapolated}: {exc}")
         else:
             corrected, est = richardson(data, rev, omega, N_MAX,
-                                        order=2 if p["composition"] == "none" else 4)
+                                        order=2 if p.composition == "none" else 4)
             step_error = float(est.max())
             if uncertainty > ESTIMATE_ACCURACY:
                 notes.append(f"step-error estimate uncertain by {uncertainty:.0%}"
                              f"{unextrapolated}")
-            elif p["richardson"]:
+            elif p.richardson:
                 data, extrapolated = corrected, True
     t = data[:, 0]
     x_rot, y_rot = to_rotating(omega, t, data[:, 1], data[:, 2])
@@ -515,7 +565,7 @@ def run(params: dict[str, Any]) -> xr.Dataset:
         "bifilar_cm_y_fixed": data[:, 6],
         "pin_angle": data[:, 7:].T,
     })
-    ds.attrs.update(hub_speed=float(omega), revolutions=int(p["revolutions"]),
+    ds.attrs.update(hub_speed=float(omega), revolutions=int(p.revolutions),
                     samples_per_rev=int(nrev), extrapolated=int(rec.extrapolated),
                     extrapolation_residual=float(rec.residual),
                     transient_revolutions=int(rec.transient),
@@ -525,13 +575,13 @@ def run(params: dict[str, Any]) -> xr.Dataset:
                     shooting_restarts=int(rec.restarts),
                     message="; ".join(notes), richardson=int(extrapolated),
                     step_error_estimate=step_error,
-                    tuning_order_linear=float(holes.order_linear),
-                    pin_damping=float(0.0 if p["bifilar"] == "locked" else pin_damping(p, holes)),
+                    tuning_order_linear=float(d.holes.order_linear),
+                    pin_damping=float(d.pin_damping),
                     fuselage_stiffness=float(k), fuselage_damping=float(c),
                     solver_seconds=time.perf_counter() - t0,
                     steps=int(sum(i.n_steps for i, _ in runs)),
                     substeps=int(sum(getattr(i, "n_substeps", i.n_steps) for i, _ in runs)),
-                    composition=p["composition"],
+                    composition=p.composition,
                     newton_iterations=int(sum(i.n_iterations for i, _ in runs)))
     return ds
 
@@ -552,11 +602,11 @@ def symmetry(system: System, hub, shaft, parts) -> CyclicSymmetry:
     return CyclicSymmetry(system, sectors, rotating=rotating, axis=Z, centre=shaft)
 
 
-def _check(p: dict[str, Any]) -> None:
+def _check(p: Parameters) -> None:
     periodic.check(p)
     check(p)
 
 
-SPEC = ModelSpec("hub", PARAMETERS, run, _check,
+SPEC = ModelSpec("hub", PARAMETERS, simulate, _check,
                  description="four-bladed hub with four bifilars on a fuselage restraint",
                  outputs=OUTPUTS)

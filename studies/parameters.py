@@ -14,10 +14,11 @@ the per-rev harmonics and the report figures from them (:mod:`pipelines.archive`
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
-from typing import Any
+from dataclasses import dataclass, field, fields
+from typing import Any, ClassVar
 
 import numpy as np
 import xarray as xr
@@ -61,6 +62,11 @@ class Param:
     def kind(self) -> type:
         return type(self.default)
 
+    @property
+    def shown_units(self) -> str:
+        """The units as messages and help show them: ``(dimensionless)`` for ``"1"``."""
+        return "(dimensionless)" if self.units == "1" else self.units
+
     def describe_range(self) -> str:
         if self.choices is not None:
             return "one of " + ", ".join(repr(c) for c in self.choices)
@@ -68,7 +74,7 @@ class Param:
         hi = "inf" if self.maximum is None else f"{self.maximum:g}"
         left = "(" if (self.exclusive_minimum or self.minimum is None) else "["
         right = "]" if self.maximum is not None else ")"
-        return f"{left}{lo}, {hi}{right} {self.units}".rstrip()
+        return f"{left}{lo}, {hi}{right} {self.shown_units}".rstrip()
 
     def check(self, name: str, value: Any) -> Any:
         """Return ``value`` converted to the parameter's type, or raise :class:`ParameterError`."""
@@ -105,7 +111,8 @@ class Param:
         high_bad = self.maximum is not None and value > self.maximum
         if low_bad or high_bad:
             raise ParameterError(
-                f"{name} = {value:g} {self.units}: outside the valid range {self.describe_range()}"
+                f"{name} = {value:g}{'' if self.units == '1' else ' ' + self.units}: outside "
+                f"the valid range {self.describe_range()}"
                 + (f" ({self.long_name})" if self.long_name else "")
             )
         return value
@@ -245,25 +252,123 @@ def output_dataset(outputs: Mapping[str, Output], values: Mapping[str, ArrayLike
     return xr.Dataset(data, coords=coords, attrs=dict(attrs or {}))
 
 
+class Parameters:
+    """A validated, complete parameter set of one model: frozen, with one typed attribute per
+    declared :class:`Param` (``p.hub_speed``).
+
+    Each model's class is generated from its declarations (:func:`parameters_class`) as a
+    frozen dataclass whose fields have the declared types (float, int, str, bool). Build one
+    with :meth:`ModelSpec.validate` (defaults filled, every value type- and range-checked, the
+    model's cross-checks applied), or with :meth:`ModelSpec.trusted` from a dict that was
+    validated already (the sweep's worker receives a plain dict).
+    """
+
+    model: ClassVar[str] = ""
+    declarations: ClassVar[Mapping[str, Param]] = {}
+    cross_check: ClassVar[Callable[[Any], None] | None] = None
+
+    def as_dict(self) -> dict[str, Any]:
+        """Name -> value of every parameter, in declaration order (for archives and case
+        ids)."""
+        return {f.name: getattr(self, f.name) for f in fields(self)}
+
+    def replace(self, **changes: Any) -> Parameters:
+        """A variation: these values changed, each type- and range-checked, and the model's
+        cross-checks applied to the result.
+
+        Raises
+        ------
+        ParameterError
+            For an unknown name, a value outside its range or an impossible combination.
+        """
+        unknown = sorted(set(changes) - set(self.declarations))
+        if unknown:
+            raise ParameterError(f"unknown parameter(s) for model {self.model!r}: "
+                                 f"{', '.join(unknown)}")
+        checked = {name: self.declarations[name].check(name, value)
+                   for name, value in changes.items()}
+        new = dataclasses.replace(self, **checked)
+        if self.cross_check is not None:
+            self.cross_check(new)
+        return new
+
+    def __getitem__(self, name: str) -> Any:
+        """The value of parameter ``name`` (for code written against the validated dict)."""
+        if name not in self.declarations:
+            raise KeyError(name)
+        return getattr(self, name)
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        # the class is generated at run time: pickle rebuilds it from its declarations
+        return (_unpickle, (self.model, dict(self.declarations), self.cross_check,
+                            self.as_dict()))
+
+
+# generated classes by (model, declarations): one class per model and process
+_CLASSES: dict[tuple[str, tuple[tuple[str, Param], ...]], type[Parameters]] = {}
+
+
+def parameters_class(model: str, declarations: Mapping[str, Param],
+                     cross_check: Callable[[Any], None] | None = None) -> type[Parameters]:
+    """The frozen dataclass of ``model``'s parameters: one field per declaration, typed as
+    its default (the same class for the same model and declarations)."""
+    key = (model, tuple(declarations.items()))
+    cls = _CLASSES.get(key)
+    if cls is None:
+        stem = "".join(part.capitalize() for part in model.replace("-", "_").split("_"))
+        cls = dataclasses.make_dataclass(
+            f"{stem}Parameters",
+            [(name, param.kind) for name, param in declarations.items()],
+            bases=(Parameters,), frozen=True)
+        cls.model = model
+        cls.declarations = dict(declarations)
+        cls.__module__ = __name__
+        _CLASSES[key] = cls
+    cls.cross_check = staticmethod(cross_check) if cross_check is not None else None
+    return cls
+
+
+def _unpickle(model: str, declarations: Mapping[str, Param],
+              cross_check: Callable[[Any], None] | None,
+              values: Mapping[str, Any]) -> Parameters:
+    return parameters_class(model, declarations, cross_check)(**values)
+
+
 @dataclass(frozen=True)
 class ModelSpec:
     """A study that the pipeline can run: its parameters, its outputs and its run function.
 
-    ``run(params) -> xarray.Dataset`` takes a complete, validated parameter dict and returns
-    the declared ``outputs`` (filled with :func:`output_dataset`).
-    ``check(params)`` raises :class:`ParameterError` for combinations that are individually
-    valid but physically impossible (e.g. a pin wider than its hole); it runs before any case.
-
-    ``version`` is the model's own version string. It is part of every case id
-    (:func:`pipelines.sweep.make_case_id`, together with the package version): bump it when a
-    change to the model changes its results, and the cases cached in an output directory by the
-    previous version are computed again instead of being reused.
+    Parameters
+    ----------
+    name
+        The model's name in the registry and in study files.
+    parameters
+        Its inputs (name -> :class:`Param`); they generate its :class:`Parameters` class.
+    simulate
+        ``simulate(p) -> xarray.Dataset`` takes the validated :class:`Parameters` and returns
+        the declared ``outputs`` (filled with :func:`output_dataset`). Call it through
+        :meth:`run`.
+    check
+        ``check(p)`` raises :class:`ParameterError` for combinations that are individually
+        valid but physically impossible (e.g. a pin wider than its hole); it runs once, in
+        :meth:`validate`, before any case.
+    description
+        One line on what the model is.
+    extra
+        Model-specific information for the pipeline.
+    outputs
+        Its results (name -> :class:`Output`).
+    version
+        The model's own version string. It is part of every case id
+        (:func:`pipelines.sweep.make_case_id`, together with the package version): bump it
+        when a change to the model changes its results, and the cases cached in an output
+        directory by an earlier version are computed again instead of being reused.
     """
 
     name: str
     parameters: Mapping[str, Param]
-    run: Callable[[dict[str, Any]], xr.Dataset]
-    check: Callable[[dict[str, Any]], None] | None = None
+    simulate: Callable[[Any], xr.Dataset]
+    check: Callable[[Any], None] | None = None
     description: str = ""
     extra: dict[str, Any] = field(default_factory=dict)
     outputs: Mapping[str, Output] = field(default_factory=dict)
@@ -271,6 +376,11 @@ class ModelSpec:
 
     def __post_init__(self) -> None:
         check_outputs(self.outputs)
+
+    @property
+    def parameters_type(self) -> type[Parameters]:
+        """The frozen dataclass of this model's parameters."""
+        return parameters_class(self.name, self.parameters, self.check)
 
     @property
     def periodic(self) -> bool:
@@ -282,17 +392,63 @@ class ModelSpec:
         """:func:`output_dataset` with this model's declarations."""
         return output_dataset(self.outputs, values, attrs, partial=partial)
 
-    def complete(self, given: Mapping[str, Any]) -> dict[str, Any]:
-        """Defaults filled in, every value type- and range-checked, cross-checks applied."""
+    def validate(self, given: Mapping[str, Any] | Parameters = ()) -> Parameters:
+        """The typed parameters of ``given``: defaults filled in, every value type- and
+        range-checked, the model's cross-checks applied. Already validated parameters of this
+        model are returned as they are.
+
+        Raises
+        ------
+        ParameterError
+            One line naming the parameter, its value and its valid range.
+        """
+        cls = self.parameters_type
+        if isinstance(given, cls):
+            return given
+        given = dict(given)
         unknown = sorted(set(given) - set(self.parameters))
         if unknown:
             raise ParameterError(
                 f"unknown parameter(s) for model {self.name!r}: {', '.join(unknown)}; "
                 f"known: {', '.join(sorted(self.parameters))}"
             )
-        out = {name: p.default for name, p in self.parameters.items()}
+        values = {name: p.default for name, p in self.parameters.items()}
         for name, value in given.items():
-            out[name] = self.parameters[name].check(name, value)
+            values[name] = self.parameters[name].check(name, value)
+        p = cls(**values)
         if self.check is not None:
-            self.check(out)
-        return out
+            self.check(p)
+        return p
+
+    def complete(self, given: Mapping[str, Any]) -> dict[str, Any]:
+        """:meth:`validate` as a plain dict (what a case id is made of and a worker
+        receives)."""
+        return self.validate(given).as_dict()
+
+    def trusted(self, values: Mapping[str, Any] | Parameters) -> Parameters:
+        """The typed parameters of a complete parameter set validated already (by
+        :meth:`validate` or :meth:`complete`, possibly in another process): not checked
+        again.
+
+        Raises
+        ------
+        ParameterError
+            If ``values`` does not name exactly this model's parameters.
+        """
+        cls = self.parameters_type
+        if isinstance(values, cls):
+            return values
+        if set(values) != set(self.parameters):
+            missing = sorted(set(self.parameters) - set(values))
+            unknown = sorted(set(values) - set(self.parameters))
+            raise ParameterError(
+                f"not a complete parameter set of model {self.name!r}"
+                + (f"; missing: {', '.join(missing)}" if missing else "")
+                + (f"; unknown: {', '.join(unknown)}" if unknown else ""))
+        return cls(**values)
+
+    def run(self, params: Mapping[str, Any] | Parameters) -> xr.Dataset:
+        """Run one case: ``params`` is this model's :class:`Parameters` or the complete,
+        validated dict of them (:meth:`complete`), passed to the model as
+        :class:`Parameters` without checking it again."""
+        return self.simulate(self.trusted(params))

@@ -22,14 +22,13 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from solver.integrators import project_positions
 from solver.symmetry import affine_combination
-from studies.parameters import Param, ParameterError
+from studies.parameters import Param, ParameterError, Parameters
 from studies.progress import report
 
 Array = NDArray[np.float64]
@@ -61,13 +60,14 @@ PARAMETERS: dict[str, Param] = {
 }
 
 
-def check(p: dict[str, Any]) -> None:
+def check(p: Parameters) -> None:
     """Cross-checks of the marching and shooting parameters (:data:`PARAMETERS`,
     :func:`shooting_parameters` and the model's own ``revolutions`` and ``max_revolutions``)."""
-    if p["revolutions"] > p["max_revolutions"]:
-        raise ParameterError("revolutions must not exceed max_revolutions")
+    if p.revolutions > p.max_revolutions:
+        raise ParameterError(f"revolutions = {p.revolutions} must not exceed max_revolutions = "
+                             f"{p.max_revolutions}")
     for name in ("extrapolation_window", "shooting_window"):
-        if p.get(name) == 1:
+        if getattr(p, name, 0) == 1:
             raise ParameterError(f"{name} = 1: must be 0 (march only) or at least 2 (an "
                                  "extrapolation needs two changes)")
 

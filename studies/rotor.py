@@ -4,7 +4,7 @@ The model, built from solver parts:
 
 * fuselage-beam — a non-rotating geometrically exact beam clamped to the ground, along +z from
   z = −``fuselage_length`` to the hub centre (cubic elements); uniform, uncoupled section with
-  bending stiffness EI (both planes) scaled by ``fuselage_stiffness_scale`` (paper case 3
+  bending stiffness EI (both planes) scaled by ``fuselage_bending_stiffness_scale`` (paper case 3
   halves EI33); its section axes are d1 = z (up), d2 = x (aft), d3 = y, so the root bending
   moments about d2 and d3 are the paper's M11 (about the fuselage x axis) and M22 (about y).
   A shaft head of mass ``shaft_mass`` is welded to its top; an in-plane damper at the top
@@ -57,6 +57,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -79,13 +80,13 @@ from solver.system import System
 from solver.timefunctions import TimeFunction, linear
 from solver.turning import TurningParts
 from studies import periodic
-from studies.absorbers import N_BIFILARS, AbsorberProbe, add_absorbers, holes_for
+from studies.absorbers import N_BIFILARS, AbsorberProbe, add_absorbers, holes_for, pin_damping
 from studies.absorbers import OUTPUTS as ABSORBER_OUTPUTS
 from studies.absorbers import PARAMETERS as ABSORBERS
 from studies.bifilar import BifilarParts
 from studies.equivalent import EquivalentParts
 from studies.holes import Holes
-from studies.parameters import ModelSpec, Output, Param, ParameterError
+from studies.parameters import ModelSpec, Output, Param, ParameterError, Parameters
 from studies.periodic import march, shoot, stepper, to_rotating
 from studies.progress import report
 from studies.uh60a import (
@@ -158,8 +159,8 @@ PARAMETERS: dict[str, Param] = {
     "fuselage_bending_stiffness": Param(1.56e7, "N m2", "nominal fuselage-beam bending "
                                         "stiffness EI (both planes)", minimum=1e3,
                                         maximum=1e12),
-    "fuselage_stiffness_scale": Param(1.0, "1", "scale on the fuselage-beam bending stiffness",
-                                      minimum=0.01, maximum=100.0),
+    "fuselage_bending_stiffness_scale": Param(1.0, "1", "scale on the fuselage-beam bending "
+                                              "stiffness EI", minimum=0.01, maximum=100.0),
     "fuselage_damping_ratio": Param(0.02, "1", "damping ratio of the nominal in-plane fuselage "
                                     "mode", minimum=0.0, maximum=1.0),
     "scheme": Param("galpha", "1", "time integration scheme", choices=("galpha", "ed", "ep")),
@@ -264,7 +265,7 @@ class RotorParts:
     fuselage_damping: float
 
 
-def lag_feedback_gains(p: dict[str, Any]) -> tuple[float, float, float]:
+def lag_feedback_gains(p: Parameters) -> tuple[float, float, float]:
     """Delay τ (s), stiffness a (N·m/rad) and damping b (N·m·s/rad) of the delayed lag
     feedback (:class:`solver.forces.RelativeRotation`) that adds the damping ratio
     ``lag_feedback`` to the lag mode without moving its frequency.
@@ -276,36 +277,36 @@ def lag_feedback_gains(p: dict[str, Any]) -> tuple[float, float, float]:
     coupled to the hub and fuselage and shifted by the feedback itself (a delay equation): on
     a single lag degree of freedom ζ = 0.5 gives a decay of about 0.5 per revolution instead
     of 0.95 (tests/solver/test_solver_core.py checks the delay equation's roots)."""
-    omega = p["hub_speed"]
+    omega = p.hub_speed
     nu = math.sqrt(UH60A.hinge_radius * UH60A.blade_first_moment / UH60A.blade_flap_inertia)
     w, th = nu * omega, 2 * math.pi * nu
-    b = p["lag_feedback"] * UH60A.blade_flap_inertia * w
+    b = p.lag_feedback * UH60A.blade_flap_inertia * w
     return 2 * math.pi / omega, b * w * math.sin(th) / (1 - math.cos(th)), b
 
 
-def add_blade(model: Model, hub, k: int, p: dict[str, Any],
-              damping_factor: float = 1.0,
-              feedback: bool = False) -> tuple[Beam, RelativeRotation]:
+def add_blade(model: Model, hub, k: int, p: Parameters, damping_factor: float = 1.0,
+              feedback: tuple[float, float, float] | None = None
+              ) -> tuple[Beam, RelativeRotation]:
     """Blade ``k`` (azimuth kπ/2 at t = 0) on ``hub`` (a body spinning at ``hub_speed`` about
     +z, frame = identity at t = 0): flap, lag and driven pitch revolutes at the hinge, joined
-    by massless links, and the lag damper (× ``damping_factor``; with ``feedback`` also the
-    delayed feedback of :func:`lag_feedback_gains`). Returns (beam, damper)."""
-    omega = p["hub_speed"]
+    by massless links, and the lag damper (× ``damping_factor``; with ``feedback``, the gains
+    of :func:`lag_feedback_gains`, also the delayed feedback). Returns (beam, damper)."""
+    omega = p.hub_speed
     e = section_origin(include_cuff=True)
     r_tw, tw_s = blade_twist("structural")
     psi = k * math.pi / 2
     er = np.array([math.cos(psi), math.sin(psi), 0.0])
     et = np.array([-math.sin(psi), math.cos(psi), 0.0])
     hinge = e * er
-    pitch = swashplate(*(math.radians(p[n]) for n in ("collective", "cyclic_cosine",
-                                                       "cyclic_sine")), omega, psi)
+    pitch = swashplate(math.radians(p.collective), math.radians(p.cyclic_cosine),
+                       math.radians(p.cyclic_sine), omega, psi)
     theta_start = pitch.value(0.0)
 
     def twist(s):  # structural twist, the blade built at its pitch at t = 0
         return np.interp(np.asarray(s) + e, r_tw, tw_s) + theta_start
 
     blade = straight_beam(f"blade{k}", hinge, UH60A.radius * er, blade_sections(),
-                          n_elements=p["blade_elements"], e3=Z, twist=twist,
+                          n_elements=p.blade_elements, e3=Z, twist=twist,
                           angular_velocity=omega * Z)
     # the hinge links' frames turned with the blade's azimuth, so that blade k + 1's parts are
     # blade k's turned by a quarter (the quarter-revolution symmetry maps one onto the other)
@@ -313,21 +314,21 @@ def add_blade(model: Model, hub, k: int, p: dict[str, Any],
             "orientation": rotation_about(Z, psi)}
     flap_link = RigidBody(f"flap_link{k}", 0.0, position=hinge, **spin)
     lag_link = RigidBody(f"lag_link{k}", 0.0, position=hinge, **spin)
-    tau, a, b = lag_feedback_gains(p) if feedback else (0.0, 0.0, 0.0)
+    tau, a, b = feedback if feedback is not None else (0.0, 0.0, 0.0)
     damper = RelativeRotation(f"lag_damper{k}", flap_link, lag_link, axis=Z,
-                              damping=p["lag_damping"] * damping_factor, delay=tau,
+                              damping=p.lag_damping * damping_factor, delay=tau,
                               delayed_stiffness=a, delayed_damping=b)
     model.add(flap_link, lag_link, blade,
               Revolute(f"flap{k}", hub, flap_link, point=hinge, axis=et),
               Revolute(f"lag{k}", flap_link, lag_link, point=hinge, axis=Z),
               Revolute(f"pitch{k}", lag_link, blade.root, point=hinge, axis=er,
                        driven=_shifted(pitch)))
-    if p["lag_damping"] > 0 or damper.feedback:
+    if p.lag_damping > 0 or damper.feedback:
         model.add(damper)
     return blade, damper
 
 
-def airloads(blade: Beam, k: int, p: dict[str, Any], flight: FlightCondition,
+def airloads(blade: Beam, k: int, p: Parameters, flight: FlightCondition,
              inflow: DynamicInflow | None) -> LiftingLine:
     """The lifting line of blade ``k``: the deck's chord and aero twist (relative to the
     beam's structural twist), lift slope, profile drag, tip loss, from the first airstation
@@ -347,63 +348,111 @@ def airloads(blade: Beam, k: int, p: dict[str, Any], flight: FlightCondition,
                        span=(r_as[0] - e, UH60A.radius - e), lift_slope=UH60A.lift_slope,
                        drag=UH60A.cd0, pitch=aero_pitch,
                        lift_end=UH60A.tip_loss * UH60A.radius - e,
-                       wake_states=p["wake_states"], inflow=inflow, points=p["aero_points"])
+                       wake_states=p.wake_states, inflow=inflow, points=p.aero_points)
 
 
-def build(p: dict[str, Any], damping_factor: float = 1.0,
-          feedback: bool = False) -> tuple[Model, RotorParts]:
-    """The rotor model for complete parameters ``p``; ``damping_factor`` multiplies the lag
-    and fuselage dampers (settling phase), ``feedback`` adds the delayed lag feedback
-    (marching to the periodic response)."""
-    omega = p["hub_speed"]
+@dataclass(frozen=True)
+class RotorDesign:
+    """What a rotor case derives from its parameters, once (:func:`design`).
+
+    Attributes
+    ----------
+    holes
+        The bifilars' tracking holes (:func:`studies.absorbers.holes_for`).
+    bending_stiffness
+        The fuselage-beam's bending stiffness EI (N·m², both planes, scaled by
+        ``fuselage_bending_stiffness_scale``).
+    fuselage_stiffness
+        The fuselage-beam's in-plane stiffness at the hub, 3 EI / L³ (N/m).
+    fuselage_damping
+        The in-plane damper at the shaft head (N·s/m): the damping ratio
+        ``fuselage_damping_ratio`` of the nominal beam's first in-plane mode.
+    pin_damping
+        Rotational damping on each pin's rotation relative to its link (N·m·s/rad; zero for
+        locked bifilars).
+    lag_feedback
+        Delay τ (s), stiffness a (N·m/rad) and damping b (N·m·s/rad) of the delayed lag
+        feedback (:func:`lag_feedback_gains`).
+    """
+
+    holes: Holes
+    bending_stiffness: float
+    fuselage_stiffness: float
+    fuselage_damping: float
+    pin_damping: float
+    lag_feedback: tuple[float, float, float]
+
+
+def design(p: Parameters) -> RotorDesign:
+    """The derived design of a rotor case: holes, fuselage-beam stiffness and damper, pin
+    dampers, lag feedback gains."""
     holes = holes_for(p)
+    length = p.fuselage_length
+    # the rotor's in-plane mass on the fuselage for the damper: shaft, hub, bifilars and the
+    # blades' in-plane effective mass above their lag frequency (m − S²/I per hinged blade)
+    m_blade = UH60A.blade_mass - UH60A.blade_first_moment**2 / UH60A.blade_flap_inertia
+    m_bif = N_BIFILARS * (p.tuning_mass + 2 * p.pin_mass)
+    m_top = p.shaft_mass + p.hub_mass + N_BLADES * m_blade + m_bif
+    k_nom = 3.0 * p.fuselage_bending_stiffness / length**3
+    return RotorDesign(
+        holes=holes,
+        bending_stiffness=p.fuselage_bending_stiffness * p.fuselage_bending_stiffness_scale,
+        fuselage_stiffness=k_nom * p.fuselage_bending_stiffness_scale,
+        fuselage_damping=2.0 * p.fuselage_damping_ratio * math.sqrt(k_nom * m_top),
+        pin_damping=pin_damping(p, holes),
+        lag_feedback=lag_feedback_gains(p))
+
+
+def build(p: Parameters, d: RotorDesign | None = None, damping_factor: float = 1.0,
+          feedback: bool = False) -> tuple[Model, RotorParts]:
+    """The rotor model for parameters ``p`` and their derived design ``d`` (default
+    :func:`design`'s); ``damping_factor`` multiplies the lag and fuselage dampers (settling
+    phase), ``feedback`` adds the delayed lag feedback (marching to the periodic response)."""
+    omega = p.hub_speed
+    d = design(p) if d is None else d
+    holes = d.holes
     g0 = ground()
     model = Model()
     # ---- fuselage-beam and shaft head (non-rotating)
-    length = p["fuselage_length"]
-    ei = p["fuselage_bending_stiffness"] * p["fuselage_stiffness_scale"]
+    length = p.fuselage_length
+    ei = d.bending_stiffness
     section = isotropic_section(EA=FUSELAGE_EA, GA2=FUSELAGE_GA, GA3=FUSELAGE_GA,
                                 GJ=FUSELAGE_GJ, EI2=ei, EI3=ei, mass=FUSELAGE_MASS,
                                 i22=1e-3, i33=1e-3)
     fus = straight_beam("fuselage", (0.0, 0.0, -length), (0.0, 0.0, 0.0), section,
                         n_elements=FUSELAGE_ELEMENTS, e3=(0.0, 1.0, 0.0))
-    shaft = RigidBody("shaft", p["shaft_mass"], inertia=(10.0, 10.0, 10.0))
-    # the rotor's in-plane mass on the fuselage for the damper: shaft, hub, bifilars and the
-    # blades' in-plane effective mass above their lag frequency (m − S²/I per hinged blade)
-    m_blade = UH60A.blade_mass - UH60A.blade_first_moment**2 / UH60A.blade_flap_inertia
-    m_bif = N_BIFILARS * (p["tuning_mass"] + 2 * p["pin_mass"])
-    m_top = p["shaft_mass"] + p["hub_mass"] + N_BLADES * m_blade + m_bif
-    k_nom = 3.0 * p["fuselage_bending_stiffness"] / length**3
-    c_fus = 2.0 * p["fuselage_damping_ratio"] * math.sqrt(k_nom * m_top)
+    shaft = RigidBody("shaft", p.shaft_mass, inertia=(10.0, 10.0, 10.0))
+    c_fus = d.fuselage_damping
     model.add(g0, fus, shaft,
               Rigid("fuselage_clamp", g0, fus.root),
               Rigid("shaft_mount", fus.tip, shaft),
               Spring("fuselage_damper", None, shaft, stiffness=np.zeros((3, 3)),
                      damping=np.diag([c_fus, c_fus, 0.0]) * damping_factor))
     # ---- hub
-    hub = RigidBody("hub", p["hub_mass"],
-                    inertia=(p["hub_tilt_inertia"], p["hub_tilt_inertia"], 1.0),
+    hub = RigidBody("hub", p.hub_mass,
+                    inertia=(p.hub_tilt_inertia, p.hub_tilt_inertia, 1.0),
                     angular_velocity=omega * Z)
     # (polar inertia: the speed is prescribed, so it only sets the driving torque; a unit
     # value, as in studies.hub, keeps the driven rotation well conditioned)
     model.add(hub, Revolute("rotor", shaft, hub, axis=Z, driven=linear(omega)))
     # ---- blades, aerodynamics
-    flight = FlightCondition(p["flight_speed"], math.radians(p["shaft_tilt"]),
-                             p["air_density"])
-    m = p["inflow_harmonics"]
+    flight = FlightCondition(p.flight_speed, math.radians(p.shaft_tilt),
+                             p.air_density)
+    m = p.inflow_harmonics
     # a first guess of the thrust coefficient starts the inflow near its level
     inflow = DynamicInflow("inflow", flight, UH60A.radius, omega, model="peters-he",
                            harmonics=m, power=m + 1, initial_thrust=0.007)
     model.add(inflow)
     blades, lines = [], []
     for k in range(N_BLADES):
-        blade, _ = add_blade(model, hub, k, p, damping_factor, feedback)
+        blade, _ = add_blade(model, hub, k, p, damping_factor,
+                             d.lag_feedback if feedback else None)
         lines.append(model.add(airloads(blade, k, p, flight, inflow)))
         blades.append(blade)
     # ---- bifilars (or their equivalent, whose particle rides on the shaft head)
-    absorbers = add_absorbers(model, hub, shaft, holes, p)
+    absorbers = add_absorbers(model, hub, shaft, holes, p, d.pin_damping)
     return model, RotorParts(hub, shaft, fus, blades, lines, inflow, absorbers, holes,
-                             k_nom * p["fuselage_stiffness_scale"], c_fus)
+                             d.fuselage_stiffness, c_fus)
 
 
 def _line_set(system: System, line: LiftingLine):
@@ -453,7 +502,7 @@ def newton_tolerance(steps_per_rev: int) -> float:
     return NEWTON_TOL * min(1.0, (NEWTON_STEPS / steps_per_rev) ** 3)
 
 
-def integrator(system: System, p: dict[str, Any], h: float, parts: RotorParts | None = None,
+def integrator(system: System, p: Parameters, h: float, parts: RotorParts | None = None,
                book_work: bool = False, tol: float | None = None,
                wake_tolerance: float = WAKE_TOLERANCE) -> Integrator:
     """The time integrator ``p`` asks for, with step ``h`` (s); ρ∞ applies to ``galpha``.
@@ -464,10 +513,10 @@ def integrator(system: System, p: dict[str, Any], h: float, parts: RotorParts | 
     booking it costs a force evaluation per step.
     ``tol``: Newton's relative tolerance (default :func:`newton_tolerance` of the steps per
     revolution)."""
-    rho = p["rho_inf"] if p["scheme"] == "galpha" else None
-    spin = None if parts is None else turning(system, parts, p["hub_speed"])
+    rho = p.rho_inf if p.scheme == "galpha" else None
+    spin = None if parts is None else turning(system, parts, p.hub_speed)
     if tol is None:
-        tol = newton_tolerance(p["steps_per_rev"])
+        tol = newton_tolerance(p.steps_per_rev)
     if not (math.isfinite(wake_tolerance) and wake_tolerance > 0):
         raise ValueError(f"wake_tolerance = {wake_tolerance!r} must be finite and > 0")
     scale = None
@@ -478,27 +527,27 @@ def integrator(system: System, p: dict[str, Any], h: float, parts: RotorParts | 
             if id(block.owner) in lines:
                 o = system.offset[block.owner]
                 scale[o : o + block.size] = wake_tolerance
-    return make_integrator(system, p["scheme"], h, rho_inf=rho, tol=tol,
+    return make_integrator(system, p.scheme, h, rho_inf=rho, tol=tol,
                            book_work=book_work, turning=spin, tolerance_scale=scale)
 
 
-def _settle(p: dict[str, Any], h: float) -> tuple[dict[str, Any], int, int]:
+def _settle(p: Parameters, d: RotorDesign, h: float) -> tuple[dict[str, Any], int, int]:
     """March ``settle_revolutions`` with the lag and fuselage dampers multiplied by a factor
     that falls geometrically from ``settle_damping_factor`` towards 1, one value per
     revolution (each step down changes the forced response a little, so the transient it
     starts is small); returns (integrator state to continue from, steps, Newton
     iterations)."""
-    n, big = p["settle_revolutions"], p["settle_damping_factor"]
+    n, big = p.settle_revolutions, p.settle_damping_factor
     state = None
     steps = iterations = 0
     for rev in range(n):
         factor = big ** (1.0 - rev / n)
-        model, parts = build(p, damping_factor=factor)
+        model, parts = build(p, d, damping_factor=factor)
         integ = integrator(System(model), p, h, parts)
         if state is not None:
             integ.restore(state)
-        step = stepper(integ, p["hub_speed"])
-        for _ in range(p["steps_per_rev"]):
+        step = stepper(integ, p.hub_speed)
+        for _ in range(p.steps_per_rev):
             step()
         state = integ.state()
         steps += integ.n_steps
@@ -508,22 +557,28 @@ def _settle(p: dict[str, Any], h: float) -> tuple[dict[str, Any], int, int]:
     return state, steps, iterations
 
 
-def run(params: dict[str, Any]) -> xr.Dataset:
+def run(given: Mapping[str, Any] | Parameters = ()) -> xr.Dataset:
+    """One rotor case from its parameters (validated here unless they are the rotor's
+    :class:`~studies.parameters.Parameters` already): see :func:`simulate`."""
+    return simulate(SPEC.validate(given))
+
+
+def simulate(p: Parameters) -> xr.Dataset:
     """Settle, march until periodic, record whole revolutions (see the module docstring)."""
-    p = SPEC.complete(params)
-    omega = p["hub_speed"]
-    nrev = p["steps_per_rev"]
+    d = design(p)
+    omega = p.hub_speed
+    nrev = p.steps_per_rev
     h = 2 * np.pi / omega / nrev
     t0 = time.perf_counter()
     steps = iterations = 0
     settled = None
-    if p["settle_revolutions"] and p["settle_damping_factor"] != 1.0:
-        settled, steps, iterations = _settle(p, h)
+    if p.settle_revolutions and p.settle_damping_factor != 1.0:
+        settled, steps, iterations = _settle(p, d, h)
     # a restart cannot carry the delay line of the lag feedback: shooting replaces it
-    feedback = p["lag_feedback"] > 0 and not p["shooting_window"]
+    feedback = p.lag_feedback > 0 and not p.shooting_window
 
     def start(with_feedback: bool, state: dict[str, Any] | None):
-        model, parts = build(p, feedback=with_feedback)
+        model, parts = build(p, d, feedback=with_feedback)
         system = System(model)
         integ = integrator(system, p, h, parts)
         if state is not None:  # the same layout: continue exactly
@@ -559,18 +614,18 @@ def run(params: dict[str, Any]) -> xr.Dataset:
                                 np.roll(block[:, len(_Sampler.COLUMNS):], j, axis=1)])
 
     hint = "raise max_revolutions, settle_revolutions or pin_damping_ratio"
-    if p["shooting_window"]:
+    if p.shooting_window:
         rec = shoot(integ, lambda: sampler(integ), signals, observe=observe,
                     symmetry=symmetry(system, parts), system=system, steps_per_rev=nrev,
-                    revolutions=p["revolutions"], max_revolutions=p["max_revolutions"],
-                    tolerance=p["periodic_tolerance"], groups=groups, separate_mean=True,
-                    window=p["shooting_window"], max_restarts=p["shooting_restarts"],
+                    revolutions=p.revolutions, max_revolutions=p.max_revolutions,
+                    tolerance=p.periodic_tolerance, groups=groups, separate_mean=True,
+                    window=p.shooting_window, max_restarts=p.shooting_restarts,
                     hint=hint)
     else:
         rec = march(step, lambda: sampler(integ), signals, steps_per_rev=nrev,
-                    revolutions=p["revolutions"], max_revolutions=p["max_revolutions"],
-                    tolerance=p["periodic_tolerance"], groups=groups, separate_mean=True,
-                    hint=hint, window=p["extrapolation_window"],
+                    revolutions=p.revolutions, max_revolutions=p.max_revolutions,
+                    tolerance=p.periodic_tolerance, groups=groups, separate_mean=True,
+                    hint=hint, window=p.extrapolation_window,
                     before_recording=remove_feedback if feedback else None)
     for i in [*done, integ]:
         steps += i.n_steps
@@ -581,7 +636,7 @@ def run(params: dict[str, Any]) -> xr.Dataset:
     x_rot, y_rot = to_rotating(omega, t, col["x"], col["y"])
     thrust = float(col["thrust"].mean())
     disk = math.pi * UH60A.radius**2
-    ct = thrust / (p["air_density"] * disk * (omega * UH60A.radius) ** 2)
+    ct = thrust / (p.air_density * disk * (omega * UH60A.radius) ** 2)
     ds = SPEC.dataset({
         "time": t,
         "bifilar": np.arange(N_BIFILARS),
@@ -604,16 +659,16 @@ def run(params: dict[str, Any]) -> xr.Dataset:
         "blade_root_axial": col["n1"],
         "blade_root_torsion": col["t1"],
     })
-    ds.attrs.update(hub_speed=float(omega), revolutions=int(p["revolutions"]),
+    ds.attrs.update(hub_speed=float(omega), revolutions=int(p.revolutions),
                     samples_per_rev=int(nrev), extrapolated=int(rec.extrapolated),
                     extrapolation_residual=float(rec.residual),
                     transient_revolutions=int(
-                        rec.transient + p["settle_revolutions"]),
+                        rec.transient + p.settle_revolutions),
                     periodicity_change=float(rec.change),
                     shooting_restarts=int(rec.restarts), message=rec.note,
                     tuning_order_linear=float(parts.holes.order_linear),
                     thrust_coefficient=ct, thrust_coefficient_over_solidity=ct / UH60A.solidity,
-                    advance_ratio=p["flight_speed"] / (omega * UH60A.radius),
+                    advance_ratio=p.flight_speed / (omega * UH60A.radius),
                     fuselage_stiffness=float(parts.fuselage_stiffness),
                     fuselage_damping=float(parts.fuselage_damping),
                     simulated_revolutions=float(steps / nrev),
@@ -657,16 +712,16 @@ def turning(system: System, parts: RotorParts, omega: float) -> TurningParts:
     return TurningParts(system, [o for s in sectors for o in s] + rotating, Z, omega)
 
 
-def _check(p: dict[str, Any]) -> None:
+def _check(p: Parameters) -> None:
     periodic.check(p)
     holes_for(p)
-    if p["shooting_window"] and p["steps_per_rev"] % N_BLADES:
-        raise ParameterError(f"steps_per_rev = {p['steps_per_rev']}: must be a multiple of "
+    if p.shooting_window and p.steps_per_rev % N_BLADES:
+        raise ParameterError(f"steps_per_rev = {p.steps_per_rev}: must be a multiple of "
                              f"{N_BLADES} for shooting on the quarter-revolution map (or set "
                              "shooting_window = 0 to march)")
 
 
-SPEC = ModelSpec("rotor", PARAMETERS, run, _check,
+SPEC = ModelSpec("rotor", PARAMETERS, simulate, _check,
                  description="four-bladed elastic UH-60 rotor with aerodynamics and four "
                              "bifilars on a fuselage-beam",
                  outputs=OUTPUTS)

@@ -278,7 +278,7 @@ def test_designed_path_vertex(shape):
     σ = 0 on the radial line, tangent +y, radius of curvature ρ_v there, and R_v/ρ_v − 1 = n²
     (errata 6, pin-less). For the epicycloid also a + 2b = R_v and a²/(4b(a+b)) = n²."""
     n = 3.0
-    p = SPEC.complete({"hole": shape, "tuning_order": n, "pin_mass": 0.0, "pin_inertia": 0.0})
+    p = SPEC.validate({"hole": shape, "tuning_order": n, "pin_mass": 0.0, "pin_inertia": 0.0})
     holes = holes_for(p)
     r_v = holes.params["vertex_radius"]
     rho = holes.params["vertex_curvature_radius"]
@@ -308,7 +308,7 @@ def test_declared_swing_rate_satisfies_every_constraint(shape):
     from solver.model import Model
     from solver.system import System
 
-    holes = holes_for(SPEC.complete({"hole": shape}))
+    holes = holes_for(SPEC.validate({"hole": shape}))
     om, center, vel = 27.0, np.array([1e-4, -2e-4, 0.0]), np.array([0.003, 0.01, 0.0])
     for amp, rate in ((0.1, 2.0), (-0.3, -5.0)):
         model = Model()
@@ -334,7 +334,7 @@ def test_ep_energy_balance_with_spinning_hub():
     """The EP scheme's exact balance with the prescribed hub: E − W (W the work of the hub's
     driving constraint) constant to roundoff: measured 4.4e-15 relative to E0 = 1.29e3 J (E
     itself varies by 41 %, W up to 295 J), 1 period at 100 steps, amplitude 20°."""
-    p = SPEC.complete({"hole": "circle", "hole_diameter": D_HOLE, "amplitude": 20.0})
+    p = SPEC.validate({"hole": "circle", "hole_diameter": D_HOLE, "amplitude": 20.0})
     model, _, _ = bifilar.build(p)
     t_lin = 2 * np.pi / (eq7_order(D_HOLE) * OMEGA)
     sim = simulate(model, t_lin, t_lin / 100, reactions=False, record_every=1000)
@@ -347,7 +347,7 @@ def test_ep_energy_balance_with_spinning_hub():
 
 # ---------------------------------------------------------------------------- bad input
 def _complete(**kw):
-    return SPEC.complete(kw)
+    return SPEC.validate(kw)
 
 
 @pytest.mark.parametrize("kw, match", [
@@ -367,7 +367,7 @@ def test_bad_geometry_raises_parameter_error(kw, match):
 
 def test_pinless_is_allowed():
     p = _complete(pin_mass=0.0, pin_inertia=0.0)
-    assert p["pin_mass"] == 0.0 and p["pin_inertia"] == 0.0
+    assert p.pin_mass == 0.0 and p.pin_inertia == 0.0
 
 
 @pytest.mark.parametrize("points, match", [

@@ -307,10 +307,10 @@ def test_hub_equivalent_model_layout():
     ``equivalent_pin_angles``) and the declared velocities satisfy every constraint."""
     from solver.integrators import project_velocities
     from studies.equivalent import EquivalentParts, equivalent_cm, equivalent_pin_angles
-    from studies.hub import SPEC, build, linear_start
+    from studies.hub import SPEC, build, design, linear_start
 
-    p = SPEC.complete({"bifilar": "equivalent", "initial_state": "rest"})
-    model, *_, parts, _holes, _kc = build(p)
+    p = SPEC.validate({"bifilar": "equivalent", "initial_state": "rest"})
+    model, *_, parts = build(p)
     assert isinstance(parts, EquivalentParts)
     s = System(model)
     assert s.n - s.mh - s.mn == 2 + 2
@@ -321,9 +321,9 @@ def test_hub_equivalent_model_layout():
     np.testing.assert_allclose(equivalent_pin_angles(s, parts, q, 0.0), 0.0, atol=1e-15)
     np.testing.assert_allclose(equivalent_cm(s, parts, q, 0.0), 0.0, atol=1e-15)
 
-    p = SPEC.complete({"bifilar": "equivalent"})
-    model, _hub, shaft, parts, holes, _kc = build(p)
-    start = linear_start(p, holes)
+    p = SPEC.validate({"bifilar": "equivalent"})
+    model, _hub, shaft, parts = build(p)
+    start = linear_start(p, design(p))
     assert np.abs(start.angles).max() > 0.01 and np.abs(start.center).max() > 1e-5
     s = System(model)
     q, v = s.q0_raw, s._v_declared

@@ -129,7 +129,7 @@ def test_hub_model_has_no_redundant_constraints():
     """One bifilar adds exactly one degree of freedom; the hub adds two (in-plane)."""
     from solver.system import System
 
-    p = SPEC.complete({})
+    p = SPEC.validate({})
     model, *_ = build(p)
     s = System(model)
     # unknowns minus holonomic and nonholonomic rows = degrees of freedom
@@ -147,18 +147,18 @@ def test_linear_response_is_the_linear_models_periodic_response(bifilar):
     (equivalent hub), 5.5e-4 (its swing), 1.5e-4 (locked hub)."""
     from studies.absorbers import AZIMUTHS
     from studies.equivalent import whirl_amplitude
-    from studies.hub import holes_for, linear_response, run
+    from studies.hub import design, linear_response, run
 
-    p = SPEC.complete({"bifilar": bifilar})
-    whirl, zz, aa = linear_response(p, holes_for(p))
-    assert whirl == pytest.approx(p["hub_speed"] * np.array([4.0, -4.0]))
+    p = SPEC.validate({"bifilar": bifilar})
+    whirl, zz, aa = linear_response(p, design(p))
+    assert whirl == pytest.approx(p.hub_speed * np.array([4.0, -4.0]))
     ds = run({"bifilar": bifilar})
     assert ds.attrs["richardson"] == 1 and ds.attrs["message"] == ""
     n = ds.attrs["samples_per_rev"]
     t = ds.time.values[-n:]
     z = (ds.hub_x_fixed.values + 1j * ds.hub_y_fixed.values)[-n:]
     phi = np.radians(ds.pin_angle.values[:, -n:])
-    a = np.array([whirl_amplitude(phi[:, j], p["hub_speed"] * t[j] + AZIMUTHS)
+    a = np.array([whirl_amplitude(phi[:, j], p.hub_speed * t[j] + AZIMUTHS)
                   for j in range(n)])
     tones = np.exp(-1j * np.outer(whirl, t))  # (tone, sample)
     np.testing.assert_allclose(tones @ z / n, zz, rtol=0, atol=1e-3 * np.abs(zz).max())
@@ -171,16 +171,17 @@ def test_undamped_tuned_bifilars_cancel_their_tone_in_the_linear_response():
     denominator cleared, gives the exact limit — no hub motion at that tone and the swing
     whose force cancels the shear, Â = 2iF/(ω² N B) — and is continuous in the damping."""
     from studies.equivalent import equivalent_absorber
-    from studies.hub import excitation, holes_for, linear_response
+    from studies.hub import design, linear_response
 
-    p = SPEC.complete({"pin_damping_ratio": 0.0})
-    holes = holes_for(p)
-    whirl, zz, aa = linear_response(p, holes)
-    _, force = excitation(p)
-    b = equivalent_absorber(holes, 4, 0.0).coupling
+    p = SPEC.validate({"pin_damping_ratio": 0.0})
+    d = design(p)
+    whirl, zz, aa = linear_response(p, d)
+    force = d.force
+    b = equivalent_absorber(d.holes, 4, 0.0).coupling
     assert abs(zz[0]) <= 1e-12 * abs(zz[1])
     assert aa[0] == pytest.approx(2j * force[0] / (whirl[0] ** 2 * 4 * b), rel=1e-12)
-    _, zz_d, aa_d = linear_response(SPEC.complete({"pin_damping_ratio": 1e-7}), holes)
+    damped = p.replace(pin_damping_ratio=1e-7)
+    _, zz_d, aa_d = linear_response(damped, design(damped))
     np.testing.assert_allclose(aa_d, aa, rtol=1e-5)
     assert abs(zz_d[0]) < 1e-5 * abs(zz[1])
 
@@ -192,8 +193,8 @@ def test_linear_start_only_where_the_linearization_holds(monkeypatch):
     from studies import hub
 
     linear = {"initial_state": "linear"}
-    p = SPEC.complete({**linear, "excitation_3p": 3e4})  # 20 times the default: 77° of swing
-    start, note = hub.initial_start(p, hub.holes_for(p))
+    p = SPEC.validate({**linear, "excitation_3p": 3e4})  # 20 times the default: 77° of swing
+    start, note = hub.initial_start(p, hub.design(p))
     assert not np.any(start.angles) and not np.any(start.center)
     assert note == ("started at rest: the linear response swings the pins to 77.2°, beyond "
                     "the 30° where the linearization holds")
@@ -209,25 +210,25 @@ def test_nonlinear_start_falls_back_with_its_reason(monkeypatch):
     linear start where that holds, else rest, and the case message says both."""
     from studies import hub
 
-    p = SPEC.complete({"excitation_3p": 3e4})
-    start, note = hub.initial_start(p, hub.holes_for(p))
+    p = SPEC.validate({"excitation_3p": 3e4})
+    start, note = hub.initial_start(p, hub.design(p))
     assert not np.any(start.angles)
     assert note.startswith("nonlinear start not found (the harmonic balance did not converge")
     assert note.endswith("; started at rest: the linear response swings the pins to 77.2°, "
                          "beyond the 30° where the linearization holds")
-    p = SPEC.complete({})
+    p = SPEC.validate({})
     monkeypatch.setattr(hub, "NONLINEAR_START_LIMIT", np.radians(1.0))
-    start, note = hub.initial_start(p, hub.holes_for(p))
-    linear, _ = hub._linear_start_checked(p, hub.holes_for(p))
+    start, note = hub.initial_start(p, hub.design(p))
+    linear, _ = hub._linear_start_checked(p, hub.design(p))
     np.testing.assert_array_equal(start.angles, linear.angles)
     assert note == ("nonlinear start not used: it swings the pins to 5.61°, beyond the 1° the "
                     "holes cover; started from the linear response")
     for other in ({"bifilar": "locked"}, {"bifilar": "equivalent"}):  # linear models: exact
-        q = SPEC.complete(other)
-        start, note = hub.initial_start(q, hub.holes_for(q))
+        q = SPEC.validate(other)
+        start, note = hub.initial_start(q, hub.design(q))
         assert note == ""
         np.testing.assert_array_equal(start.center,
-                                      hub._linear_start_checked(q, hub.holes_for(q))[0].center)
+                                      hub._linear_start_checked(q, hub.design(q))[0].center)
 
 
 def test_nonlinear_and_linear_starts_are_nearly_periodic():
@@ -300,13 +301,13 @@ def _exact_error(given: dict):
     from studies import hub
     from studies.periodic import referred_harmonics
 
-    p = SPEC.complete(given)
-    holes = hub.holes_for(p)
+    p = SPEC.validate(given)
+    d = hub.design(p)
 
     def error(ds) -> float:
         rows = hub_samples(ds)[-ds.attrs["samples_per_rev"]:]
-        a, b = (referred_harmonics(r, p["hub_speed"], 8)
-                for r in (rows, hub.reduced_samples(p, holes, rows[:, 0])))
+        a, b = (referred_harmonics(r, p.hub_speed, 8)
+                for r in (rows, hub.reduced_samples(p, d, rows[:, 0])))
         return float(np.max(np.abs(a - b) / np.abs(b).max(axis=0)))
     return error
 

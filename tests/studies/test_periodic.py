@@ -8,6 +8,8 @@ the extrapolated limit and the marching can be checked against it.
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
 
@@ -118,15 +120,16 @@ def test_march_raises_when_not_periodic():
 
 
 def test_window_of_one_is_refused():
-    p = {**{name: prm.default for name, prm in PARAMETERS.items()}, "revolutions": 1,
-         "max_revolutions": 10}
-    check(p)
+    def params(**kw):  # the attributes check reads, as a model's Parameters has them
+        return SimpleNamespace(**{**{name: prm.default for name, prm in PARAMETERS.items()},
+                                  "revolutions": 1, "max_revolutions": 10, **kw})
+    check(params())
     with pytest.raises(ParameterError, match="extrapolation_window = 1"):
-        check({**p, "extrapolation_window": 1})
+        check(params(extrapolation_window=1))
     with pytest.raises(ParameterError, match="shooting_window = 1"):
-        check({**p, "shooting_window": 1})
-    with pytest.raises(ParameterError, match="revolutions must not exceed max_revolutions"):
-        check({**p, "revolutions": 11})
+        check(params(shooting_window=1))
+    with pytest.raises(ParameterError, match="revolutions = 11 must not exceed max_revolutions"):
+        check(params(revolutions=11))
 
 
 def _rows(n: int, revs: int, t0: float, values) -> np.ndarray:

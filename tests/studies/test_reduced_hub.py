@@ -17,9 +17,9 @@ LARGE_SWING = {"tuning_order": 2.864, "fuselage_stiffness_scale": 0.75}
 
 
 def _solve(given: dict, **kw):
-    p = SPEC.complete(given)
-    holes = hub.holes_for(p)
-    return p, holes, hub.reduced_response(p, holes, **kw), hub.linear_response(p, holes)
+    p = SPEC.validate(given)
+    d = hub.design(p)
+    return p, d.holes, hub.reduced_response(p, d, **kw), hub.linear_response(p, d)
 
 
 @pytest.mark.parametrize("hole", ["circle", "cycloid", "epicycloid"])
@@ -34,13 +34,13 @@ def test_small_shears_give_the_closed_form_linear_response(hole):
     p, holes, sol, (whirl, zz, aa) = _solve(given)
     assert sol.residual < 1e-11
     for w, z in zip(whirl, zz, strict=True):
-        got = sol.hub[sol.hub_orders == round(w / p["hub_speed"])][0]
+        got = sol.hub[sol.hub_orders == round(w / p.hub_speed)][0]
         assert abs(got - z) < 1e-6 * np.abs(zz).max()
     # the swing's tones: φ_0 = Re(A e^{−iψ_0}) puts the whirl tone ω at the rotating order
     # ω/Ω − 1 (3P from the progressive 4P, −5P from the regressive)
     slope = tangent_angle(holes, np.zeros(1))[1][0]
     for w, a in zip(whirl, aa, strict=True):
-        n = round(w / p["hub_speed"]) - 1
+        n = round(w / p.hub_speed) - 1
         expect = 0.5 * a * np.exp(-1j * AZIMUTHS[0])  # coefficient of e^{inΩt}
         got = slope * (sol.swing[n] if n > 0 else np.conj(sol.swing[-n]))
         assert abs(got - expect) < 1e-6 * np.abs(aa).max(), (n, got, expect)
@@ -76,8 +76,8 @@ def test_multibody_hub_has_the_reduced_models_periodic_response_at_large_swing(h
     ds = hub.run({**given, "steps_per_rev": 80, "periodic_tolerance": 1e-4})
     assert ds.attrs["message"] == "" and ds.attrs["richardson"] == 1
     multibody = hub_samples(ds)[-80:]
-    reduced = hub.reduced_samples(p, holes, multibody[:, 0])
-    a, b = (referred_harmonics(rows, p["hub_speed"], 8) for rows in (multibody, reduced))
+    reduced = hub.reduced_samples(p, hub.design(p), multibody[:, 0])
+    a, b = (referred_harmonics(rows, p.hub_speed, 8) for rows in (multibody, reduced))
     scale = np.abs(b).max(axis=0)
     assert np.max(np.abs(a - b) / scale) < 3e-4
     swing = 2 * np.degrees(np.abs(sol.swing[3])) * tangent_angle(holes, np.zeros(1))[1][0]
@@ -87,8 +87,8 @@ def test_multibody_hub_has_the_reduced_models_periodic_response_at_large_swing(h
 
 
 def test_bad_sampling_is_refused():
-    p = SPEC.complete({})
-    model = hub.reduced_model(p, hub.holes_for(p))
+    p = SPEC.validate({})
+    model = hub.reduced_model(p, hub.design(p))
     with pytest.raises(ValueError, match="samples = 30 must be a multiple of the 4 sectors"):
         periodic_swing(model, np.zeros(30), samples=30)
     with pytest.raises(ValueError, match=r"guess has shape \(32,\): must be \(64,\)"):

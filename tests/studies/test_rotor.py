@@ -37,7 +37,7 @@ SPEED = 150 * 0.3048  # m/s, the paper's 150 ft/s
 def test_assembled_blades_have_the_fan_plot_frequencies():
     # vacuum, collective and cyclic zero, no lag damper: the fan plot's blade (free lag hinge,
     # rigid pitch link), here with the rotor's own hinge chain and driven pitch bearing
-    p = SPEC.complete({"collective": 0.0, "cyclic_sine": 0.0, "cyclic_cosine": 0.0,
+    p = SPEC.validate({"collective": 0.0, "cyclic_sine": 0.0, "cyclic_cosine": 0.0,
                        "lag_damping": 0.0})
     hub = spinning("hub", OMEGA)
     model = Model([hub])
@@ -74,11 +74,11 @@ def isolated_rotor_thrust(flight_speed: float, steps_per_rev: int = 96, revoluti
     kw = {"flight_speed": flight_speed}
     if flight_speed == 0:
         kw.update(cyclic_sine=0.0, cyclic_cosine=0.0)
-    p = SPEC.complete(kw)
-    flight = FlightCondition(p["flight_speed"], math.radians(p["shaft_tilt"]),
-                             p["air_density"])
+    p = SPEC.validate(kw)
+    flight = FlightCondition(p.flight_speed, math.radians(p.shaft_tilt),
+                             p.air_density)
     inflow = DynamicInflow("inflow", flight, UH60A.radius, OMEGA, model="peters-he",
-                           harmonics=p["inflow_harmonics"], power=p["inflow_harmonics"] + 1,
+                           harmonics=p.inflow_harmonics, power=p.inflow_harmonics + 1,
                            initial_thrust=0.007)
     hub = spinning("hub", OMEGA)
     model = Model([hub, inflow])
@@ -102,7 +102,7 @@ def isolated_rotor_thrust(flight_speed: float, steps_per_rev: int = 96, revoluti
 
 
 def _ct(thrust, p):
-    return thrust / (p["air_density"] * math.pi * UH60A.radius**2 * (OMEGA * UH60A.radius)**2)
+    return thrust / (p.air_density * math.pi * UH60A.radius**2 * (OMEGA * UH60A.radius)**2)
 
 
 @pytest.mark.slow
@@ -139,7 +139,7 @@ def test_forward_flight_thrust_and_glauert_inflow():
     ({"collective": 40.0}, "collective"),
     ({"blade_elements": 1}, "blade_elements"),
     ({"revolutions": 5, "max_revolutions": 3}, "revolutions"),
-    ({"fuselage_stiffness_scale": 0.0}, "fuselage_stiffness_scale"),
+    ({"fuselage_bending_stiffness_scale": 0.0}, "fuselage_bending_stiffness_scale"),
 ])
 def test_bad_input_names_the_parameter(bad, match):
     with pytest.raises(ParameterError, match=match):
@@ -171,9 +171,9 @@ def test_kept_factors_turned_with_the_rotor():
     fraction of the factorizations."""
     from studies.rotor import build, integrator, turning
 
-    p = SPEC.complete({})
+    p = SPEC.validate({})
     model, parts = build(p)
-    h = 2 * np.pi / p["hub_speed"] / p["steps_per_rev"]
+    h = 2 * np.pi / p.hub_speed / p.steps_per_rev
     system = System(model)
     integ = integrator(system, p, h, parts)
     for _ in range(240):  # the start's transient gone
@@ -188,7 +188,7 @@ def test_kept_factors_turned_with_the_rotor():
     assert integ.step().converged
     after = matrix()
     lu = spla.splu(before.tocsc())
-    spin = turning(system, parts, p["hub_speed"])
+    spin = turning(system, parts, p.hub_speed)
 
     def rate(solve) -> float:  # spectral radius of I − solve·after, by power iteration
         z = rng.standard_normal(after.shape[0])
@@ -200,9 +200,9 @@ def test_kept_factors_turned_with_the_rotor():
 
     def turned(r):
         r = r.copy()
-        spin.turn(r, -p["hub_speed"] * h)
+        spin.turn(r, -p.hub_speed * h)
         x = lu.solve(r)
-        spin.turn(x, p["hub_speed"] * h)
+        spin.turn(x, p.hub_speed * h)
         return x
 
     plain, with_turn = rate(lu.solve), rate(turned)
@@ -235,14 +235,14 @@ def test_full_rotor_runs_with_ed_and_balances_its_energy():
     dissipation D ≥ 0) holds, step by step."""
     from studies.rotor import build, integrator
 
-    p = SPEC.complete({"scheme": "ed"})
+    p = SPEC.validate({"scheme": "ed"})
     system = System(build(p)[0])
     # the balance is an identity of the solved step: it holds to Newton's tolerance, so at
     # the cases' 1e-7 only to 5e-9 of E0 (0.017 J); solved to 1e-10 it holds to roundoff
-    integ = integrator(system, p, 2 * np.pi / p["hub_speed"] / p["steps_per_rev"],
+    integ = integrator(system, p, 2 * np.pi / p.hub_speed / p.steps_per_rev,
                        book_work=True, tol=1e-10)
     e0, d_prev, worst = integ.energy(), 0.0, 0.0
-    for _ in range(p["steps_per_rev"]):
+    for _ in range(p.steps_per_rev):
         info = integ.step()
         assert info.converged, info.message
         assert integ.dissipation >= d_prev
@@ -311,10 +311,10 @@ def test_wake_states_are_judged_on_their_own_tolerance():
     γ/(βh) = 1.9e3 /s times theirs), and only them."""
     from studies.rotor import WAKE_TOLERANCE, build, integrator
 
-    p = SPEC.complete({})
+    p = SPEC.validate({})
     model, parts = build(p)
     system = System(model)
-    integ = integrator(system, p, 2 * np.pi / p["hub_speed"] / p["steps_per_rev"], parts)
+    integ = integrator(system, p, 2 * np.pi / p.hub_speed / p.steps_per_rev, parts)
     wake = np.zeros(system.n, dtype=bool)
     wake[_line_set(system, parts.lines[0]).state_idx.ravel()] = True
     assert wake.sum() == sum(ln.wake_states * ln.n_sections for ln in parts.lines) > 0
