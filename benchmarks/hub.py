@@ -71,11 +71,11 @@ def profile_case() -> None:
         ds = run(params)
         pr.disable()
         pstats.Stats(pr).sort_stats("tottime").print_stats(15)
-    steps = ds.attrs["steps"]
+    steps = ds["run_steps"].item()
     print(json.dumps({"profiled_steps": steps,
-                      "steps_per_second": round(steps / ds.attrs["solver_seconds"], 1),
-                      "newton_iterations_per_step": round(ds.attrs["newton_iterations"] / steps,
-                                                          2)}))
+                      "steps_per_second": round(steps / ds["run_solver_seconds"].item(), 1),
+                      "newton_iterations_per_step": round(
+                          ds["run_newton_iterations"].item() / steps, 2)}))
 
 
 CASE_SETTINGS = {
@@ -95,7 +95,7 @@ def one_case(repeat: int) -> None:
     d = design(p)
 
     def error(ds) -> float:  # harmonics 0–8 of the last revolution against the exact ones
-        n = ds.attrs["samples_per_rev"]
+        n = ds["run_samples_per_rev"].item()
         rows = np.column_stack([ds["time"].values[-n:], *(ds[k].values[..., -n:].T for k in (
             "hub_x_fixed", "hub_y_fixed", "hub_force_x_fixed", "hub_force_y_fixed",
             "bifilar_cm_x_fixed", "bifilar_cm_y_fixed", "pin_angle"))])
@@ -115,11 +115,11 @@ def one_case(repeat: int) -> None:
         print(json.dumps({
             "case": name, "cpu_seconds_best": round(min(cpu[name]), 2),
             "cpu_seconds": [round(c, 2) for c in cpu[name]],
-            "revolutions": ds.attrs["simulated_revolutions"],
-            "of_which_at_the_coarser_step": ds.attrs["estimate_revolutions"],
-            "step_error_estimate": float(f"{ds.attrs['step_error_estimate']:.3g}"),
-            "steps": ds.attrs["steps"], "substeps": ds.attrs["substeps"],
-            "newton_iterations": ds.attrs["newton_iterations"],
+            "revolutions": ds["run_simulated_revolutions"].item(),
+            "of_which_at_the_coarser_step": ds["run_estimate_revolutions"].item(),
+            "step_error_estimate": float(f"{ds['run_step_error_estimate'].item():.3g}"),
+            "steps": ds["run_steps"].item(), "substeps": ds["run_substeps"].item(),
+            "newton_iterations": ds["run_newton_iterations"].item(),
             "harmonics_error": float(f"{error(ds):.3g}")}))
 
 

@@ -59,8 +59,8 @@ def collect(include_hub: bool = True) -> dict:
     if include_hub:
         ds = timed("hub_free", lambda: hub.run({}))
         _numeric("hub_free", ds, out)
-        out["hub_free/steps"] = np.array(float(ds.attrs["steps"]))
-        out["hub_free/newton_iterations"] = np.array(float(ds.attrs["newton_iterations"]))
+        out["hub_free/steps"] = np.array(float(ds["run_steps"].item()))
+        out["hub_free/newton_iterations"] = np.array(float(ds["run_newton_iterations"].item()))
     for k, v in cpu.items():
         print(f"{k:>28}: {v:8.3f} s CPU")
     return out

@@ -228,13 +228,14 @@ def case_summary(ds: xr.Dataset, spec: ModelSpec, n_max: int = N_MAX) -> xr.Data
     Returns
     -------
     xarray.Dataset
-        Every declared scalar result (dims ``()``). For a per-rev periodic model
-        (:attr:`ModelSpec.periodic`): the harmonics of :func:`studies.harmonics.case_harmonics`,
-        the declared histories over the last recorded revolution (dim ``time_in_rev``,
-        coordinate ``psi`` in degree, starting at psi = 0), ``run_hub_speed`` (rad s-1),
-        ``run_revolutions``, ``run_samples_per_rev``, ``run_transient_revolutions`` and, for a
-        run that reports them, ``run_simulated_revolutions`` and ``run_step_error_estimate``.
-        Otherwise: the declared histories whole (dim ``sample``) with their ``time`` (s).
+        Every declared scalar result (dims ``()``; an ``optional`` one if the run gave it),
+        the run facts among them (``run_hub_speed``, ``run_revolutions``,
+        ``run_samples_per_rev``, ``run_transient_revolutions``, ...). For a per-rev periodic
+        model (:attr:`ModelSpec.periodic`): the harmonics of
+        :func:`studies.harmonics.case_harmonics` and the declared histories over the last
+        recorded revolution (dim ``time_in_rev``, coordinate ``psi`` in degree, starting at
+        psi = 0). Otherwise: the declared histories whole (dim ``sample``) with their ``time``
+        (s).
         Every variable has the ``units`` and ``long_name`` of its declaration.
 
     Raises
@@ -245,11 +246,12 @@ def case_summary(ds: xr.Dataset, spec: ModelSpec, n_max: int = N_MAX) -> xr.Data
     """
     histories = history_variables(spec)
     scalars = scalar_variables(spec)
-    missing = [name for name in (*scalars, *histories) if name not in ds]
+    missing = [name for name in (*scalars, *histories)
+               if name not in ds and not spec.outputs[name].optional]
     if missing:
         raise ValueError(f"model result lacks declared output(s) {', '.join(missing)}")
     if spec.periodic:
-        omega, n, revs, psi0 = recording_layout(ds)
+        _, n, revs, psi0 = recording_layout(ds)
         out = case_harmonics(ds, spec.outputs, n_max)
         psi_last = psi0 + 2 * np.pi * (revs - 1)
         for name, (units, long_name) in histories.items():
@@ -262,34 +264,6 @@ def case_summary(ds: xr.Dataset, spec: ModelSpec, n_max: int = N_MAX) -> xr.Data
             out = copy_coords(out, ds, other)
         if histories:
             out = out.assign_coords(psi=_psi_coord(n), time_in_rev=_time_in_rev_coord(n))
-        out["run_hub_speed"] = ((), omega, {"units": "rad s-1", "long_name": "rotor speed"})
-        out["run_revolutions"] = ((), np.int32(revs),
-                                  {"units": "1", "long_name": "revolutions recorded"})
-        out["run_samples_per_rev"] = ((), np.int32(n),
-                                      {"units": "1", "long_name": "samples per revolution"})
-        if "transient_revolutions" in ds.attrs:
-            out["run_transient_revolutions"] = (
-                (), np.int32(ds.attrs["transient_revolutions"]),
-                {"units": "1", "long_name": "revolutions simulated before recording"},
-            )
-        if "simulated_revolutions" in ds.attrs:
-            out["run_simulated_revolutions"] = (
-                (), float(ds.attrs["simulated_revolutions"]),
-                {"units": "1", "long_name": "revolutions simulated in all: transient, recorded "
-                 "and those of the step-error estimate's coarser step"},
-            )
-        if np.isfinite(ds.attrs.get("step_error_estimate", np.nan)):
-            extrapolated = bool(ds.attrs.get("richardson", 0))
-            out["run_step_error_estimate"] = (
-                (), float(ds.attrs["step_error_estimate"]),
-                {"units": "1", "long_name": "estimated time-step error of the harmonics at the "
-                 "time step (Richardson: |c(h) - c(H)|/((H/h)^p - 1) from the periodic "
-                 "response at H, about 2h; largest over harmonics 0-8 and signals, relative to "
-                 "each signal's largest harmonic)",
-                 "comment": ("the archived harmonics are extrapolated to zero step and carry a "
-                             "fraction of it") if extrapolated else
-                 "the archived harmonics are those of the time step and carry it"},
-            )
     else:
         out = xr.Dataset()
         for name, (units, long_name) in histories.items():
@@ -306,7 +280,8 @@ def case_summary(ds: xr.Dataset, spec: ModelSpec, n_max: int = N_MAX) -> xr.Data
             out["time"] = ("sample", np.asarray(ds["time"].values, dtype=float), time_attrs)
             out = out.assign_coords(sample=_sample_coord(ds.sizes["time"]))
     for name, (units, long_name) in scalars.items():
-        out[name] = ((), ds[name].values, {"units": units, "long_name": long_name})
+        if name in ds:  # (an optional result a run may leave out)
+            out[name] = ((), ds[name].values, {"units": units, "long_name": long_name})
     renames = {d: _renamed(d, spec) for d in out.dims if _renamed(d, spec) != d}
     return out.rename(renames) if renames else out
 

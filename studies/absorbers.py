@@ -78,6 +78,10 @@ OUTPUTS: dict[str, Output] = {
     "bifilar_cm_displacement": Output(
         "m", "displacement of the centre of mass of the bifilar tuning masses, fixed frame",
         components=("bifilar_cm_x_fixed", "bifilar_cm_y_fixed"), figure="orbits"),
+    "tuning_order_linear": Output("1", "small-amplitude tuning order of the designed holes, "
+                                  "Eq. (7) with the pins", dims=()),
+    "pin_damping": Output("N m s rad-1", "rotational damping on each pin's rotation relative "
+                          "to its link (0 for locked bifilars)", dims=()),
 }
 
 

@@ -43,7 +43,15 @@ from solver.rotations import rotation_about
 from solver.simulation import simulate as simulate_model
 from studies.holes import SHAPES, Geometry, Holes, design
 from studies.measure import period_from_crossings
-from studies.parameters import ModelSpec, Output, Param, ParameterError, Parameters
+from studies.parameters import (
+    RUN_OUTPUTS,
+    ModelSpec,
+    Output,
+    Param,
+    ParameterError,
+    Parameters,
+    run_facts,
+)
 
 Z = np.array([0.0, 0.0, 1.0])
 
@@ -112,6 +120,19 @@ OUTPUTS: dict[str, Output] = {
     "frequency_order": Output("1", "ω/Ω measured from the free response in the rotating frame",
                               dims=()),
     "frequency_order_linear": Output("1", "small-amplitude order, Eq. (7)", dims=()),
+    "vertex_radius": Output("m", "hub centre to the vertex of the tuning mass's path R_v",
+                            dims=()),
+    "vertex_curvature_radius": Output("m", "radius of curvature of the path at its vertex ρ_v",
+                                      dims=()),
+    "equivalent_hole_diameter": Output("m", "diameter D of the circular holes with the same "
+                                       "vertex curvature (ρ_v = D − d)", dims=()),
+    "cycloid_a": Output("m", "generating circle radius a of the cycloidal path", dims=(),
+                        optional=True),
+    "epicycloid_a": Output("m", "fixed circle radius a of the epicycloidal path", dims=(),
+                           optional=True),
+    "epicycloid_b": Output("m", "rolling circle radius b of the epicycloidal path", dims=(),
+                           optional=True),
+    **RUN_OUTPUTS,
 }
 
 
@@ -328,11 +349,15 @@ def simulate(p: Parameters) -> xr.Dataset:
     phi = np.degrees(np.array(rec["phi"]))
     period = period_from_crossings(t, phi, center=0.0) if sim.converged else float("nan")
     order = 2 * np.pi / period / omega if np.isfinite(period) else float("nan")
-    attrs = p.as_dict()
-    attrs.update({f"hole_{k}": float(v) for k, v in parts.holes.params.items()})
-    attrs.update(converged=int(sim.converged), message=sim.message,
-                 solver_seconds=sim.seconds, time_step=h)
+    holes = parts.holes
+    shape = {k: np.float64(v) for k, v in holes.params.items()
+             if k in ("cycloid_a", "epicycloid_a", "epicycloid_b")}
     return SPEC.dataset({
+        **shape,
+        "vertex_radius": np.float64(holes.params["vertex_radius"]),
+        "vertex_curvature_radius": np.float64(holes.rho_v),
+        "equivalent_hole_diameter": np.float64(holes.hole_diameter),
+        **run_facts(sim, h),
         "time": t,
         "relation": sysm.relation_names,
         "pin_angle": phi,
@@ -344,7 +369,7 @@ def simulate(p: Parameters) -> xr.Dataset:
         "constraint_violation": np.array(rec["viol"]),
         "frequency_order": order,
         "frequency_order_linear": order_lin,
-    }, attrs)
+    }, {"message": sim.message})
 
 
 def _check_params(p: Parameters) -> None:

@@ -25,7 +25,15 @@ from solver.rotations import rotation_about
 from solver.simulation import simulate as simulate_model
 from studies.analytic import collar_circle_period, collar_cycloid_period
 from studies.measure import period_from_crossings
-from studies.parameters import ModelSpec, Output, Param, ParameterError, Parameters
+from studies.parameters import (
+    RUN_OUTPUTS,
+    ModelSpec,
+    Output,
+    Param,
+    ParameterError,
+    Parameters,
+    run_facts,
+)
 
 PARAMETERS: dict[str, Param] = {
     "curve": Param("circle", "1", "curve the collar slides on", choices=("circle", "cycloid")),
@@ -61,6 +69,7 @@ OUTPUTS: dict[str, Output] = {
     "period": Output("s", "period measured from the motion", dims=()),
     "period_analytic": Output("s", "analytic period (Eqs. 8, 26, 27 with errata)", dims=()),
     "period_error": Output("1", "relative period error", dims=()),
+    **RUN_OUTPUTS,
 }
 
 
@@ -125,10 +134,8 @@ def simulate(p: Parameters) -> xr.Dataset:
     t = ds.time.values
     period = period_from_crossings(t, theta, center=0.0) if sim.converged else float("nan")
     e = ds.energy.values
-    attrs = {k: (str(v) if isinstance(v, bool) else v) for k, v in p.as_dict().items()}
-    attrs.update(converged=int(sim.converged), message=sim.message,
-                 solver_seconds=sim.seconds, time_step=h)
     return SPEC.dataset({
+        **run_facts(sim, h),
         "time": t,
         "theta": theta,
         "s": s_arc - s_arc[0] * 0,
@@ -139,7 +146,7 @@ def simulate(p: Parameters) -> xr.Dataset:
         "period": period,
         "period_analytic": t_ref,
         "period_error": period / t_ref - 1.0,
-    }, attrs)
+    }, {"message": sim.message})
 
 
 SPEC = ModelSpec("collar", PARAMETERS, simulate, check,

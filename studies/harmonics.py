@@ -37,6 +37,9 @@ N_MAX = 8
 # revolutions, otherwise the per-rev bins of the FFT do not hold the per-rev harmonics.
 TIME_STEP_RTOL = 1e-6
 
+# The scalar results of a per-rev periodic model that give its recording's time base.
+LAYOUT = ("run_hub_speed", "run_samples_per_rev", "run_revolutions")
+
 
 class Harmonics(NamedTuple):
     """Per-rev Fourier coefficients; the last axis is the harmonic number ``0..n_max``.
@@ -165,8 +168,9 @@ def recording_layout(ds: xr.Dataset) -> tuple[float, int, int, float]:
     Parameters
     ----------
     ds
-        Model output with coordinate ``time`` (s) and attrs ``hub_speed`` (rad/s),
-        ``samples_per_rev`` and ``revolutions``.
+        Model output with coordinate ``time`` (s) and the scalar results ``run_hub_speed``
+        (rad/s), ``run_samples_per_rev`` and ``run_revolutions``
+        (:data:`studies.periodic.RUN_OUTPUTS`).
 
     Returns
     -------
@@ -180,16 +184,16 @@ def recording_layout(ds: xr.Dataset) -> tuple[float, int, int, float]:
     Raises
     ------
     ValueError
-        If an attribute is missing, or the time samples are not uniform over whole revolutions.
+        If a variable is missing, or the time samples are not uniform over whole revolutions.
     """
-    missing = [a for a in ("hub_speed", "samples_per_rev", "revolutions") if a not in ds.attrs]
+    missing = [a for a in LAYOUT if a not in ds]
     if missing or "time" not in ds.coords:
-        what = ", ".join([f"attribute {a!r}" for a in missing]
+        what = ", ".join([f"variable {a!r}" for a in missing]
                          + ([] if "time" in ds.coords else ["coordinate 'time'"]))
         raise ValueError(f"model result lacks {what}; see studies.harmonics for the layout")
-    omega = float(ds.attrs["hub_speed"])
-    n = int(ds.attrs["samples_per_rev"])
-    revs = int(ds.attrs["revolutions"])
+    omega = float(ds["run_hub_speed"])
+    n = int(ds["run_samples_per_rev"])
+    revs = int(ds["run_revolutions"])
     if not omega > 0:
         raise ValueError(f"hub_speed = {omega:g} rad/s: must be positive for per-rev harmonics")
     t = np.asarray(ds["time"].values, dtype=float)
@@ -214,9 +218,9 @@ def case_harmonics(ds: xr.Dataset, outputs: Mapping[str, Output],
     Parameters
     ----------
     ds
-        A per-rev periodic model result: ``time`` (s), attrs ``hub_speed`` (rad/s),
-        ``samples_per_rev``, ``revolutions`` (see :func:`recording_layout`), and the time
-        histories that ``outputs`` name for harmonics.
+        A per-rev periodic model result: ``time`` (s), ``run_hub_speed`` (rad/s),
+        ``run_samples_per_rev``, ``run_revolutions`` (see :func:`recording_layout`), and the
+        time histories that ``outputs`` name for harmonics.
     outputs
         The model's declarations (:attr:`studies.parameters.ModelSpec.outputs`). An in-plane
         vector (``components``) gives its amplitude under its own name and the coefficients as

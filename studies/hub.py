@@ -159,7 +159,27 @@ PARAMETERS: dict[str, Param] = {
 
 
 # What a run returns: the absorbers' shared hub-level outputs (studies.absorbers).
-OUTPUTS: dict[str, Output] = ABSORBER_OUTPUTS
+OUTPUTS: dict[str, Output] = {
+    **ABSORBER_OUTPUTS,
+    "effective_fuselage_stiffness": Output(
+        "N m-1", "in-plane fuselage stiffness at the hub (nominal times "
+        "fuselage_stiffness_scale)", dims=()),
+    "fuselage_damping": Output("N s m-1", "in-plane fuselage damping at the hub", dims=()),
+    **periodic.RUN_OUTPUTS,
+    "run_step_error_estimate": Output(
+        "1", "estimated time-step error of the harmonics at the time step (Richardson: "
+        "|c(h) - c(H)|/((H/h)^p - 1) from the periodic response at H, about 2h; largest over "
+        "harmonics 0-8 and signals, relative to each signal's largest harmonic)", dims=(),
+        optional=True),
+    "run_richardson": Output("1", "1 if the archived harmonics 0-8 are extrapolated to zero "
+                             "step (they then carry a fraction of run_step_error_estimate), 0 "
+                             "if they are those of the time step", dims=()),
+    "run_estimate_revolutions": Output("1", "revolutions simulated at the step-error "
+                                       "estimate's coarser step", dims=()),
+    "run_estimate_samples_per_rev": Output("1", "steps per revolution of the step-error "
+                                           "estimate's coarser step (0: no estimate)", dims=()),
+    "run_substeps": Output("1", "substeps of the composed time steps taken", dims=()),
+}
 
 
 def check(p: Parameters) -> None:
@@ -552,7 +572,7 @@ def simulate(p: Parameters) -> xr.Dataset:
                 data, extrapolated = corrected, True
     t = data[:, 0]
     x_rot, y_rot = to_rotating(omega, t, data[:, 1], data[:, 2])
-    ds = SPEC.dataset({
+    series = {
         "time": t,
         "bifilar": np.arange(N_BIFILARS),
         "hub_x_fixed": data[:, 1],
@@ -564,25 +584,26 @@ def simulate(p: Parameters) -> xr.Dataset:
         "bifilar_cm_x_fixed": data[:, 5],
         "bifilar_cm_y_fixed": data[:, 6],
         "pin_angle": data[:, 7:].T,
-    })
-    ds.attrs.update(hub_speed=float(omega), revolutions=int(p.revolutions),
-                    samples_per_rev=int(nrev), extrapolated=int(rec.extrapolated),
-                    extrapolation_residual=float(rec.residual),
-                    transient_revolutions=int(rec.transient),
-                    simulated_revolutions=float(sum(i.n_steps / n for i, n in runs)),
-                    estimate_revolutions=float(sum(i.n_steps / n for i, n in runs[1:])),
-                    estimate_samples_per_rev=int(n_c if len(runs) > 1 else 0),
-                    shooting_restarts=int(rec.restarts),
-                    message="; ".join(notes), richardson=int(extrapolated),
-                    step_error_estimate=step_error,
-                    tuning_order_linear=float(d.holes.order_linear),
-                    pin_damping=float(d.pin_damping),
-                    fuselage_stiffness=float(k), fuselage_damping=float(c),
-                    solver_seconds=time.perf_counter() - t0,
-                    steps=int(sum(i.n_steps for i, _ in runs)),
-                    substeps=int(sum(getattr(i, "n_substeps", i.n_steps) for i, _ in runs)),
-                    composition=p.composition,
-                    newton_iterations=int(sum(i.n_iterations for i, _ in runs)))
+    }
+    facts = {
+        **periodic.run_facts(
+            rec, hub_speed=omega, revolutions=p.revolutions, samples_per_rev=nrev,
+            transient=rec.transient, simulated=sum(i.n_steps / n for i, n in runs),
+            steps=sum(i.n_steps for i, _ in runs),
+            iterations=sum(i.n_iterations for i, _ in runs),
+            seconds=time.perf_counter() - t0),
+        "run_richardson": np.int32(extrapolated),
+        "run_estimate_revolutions": np.float64(sum(i.n_steps / n for i, n in runs[1:])),
+        "run_estimate_samples_per_rev": np.int32(n_c if len(runs) > 1 else 0),
+        "run_substeps": np.int32(sum(getattr(i, "n_substeps", i.n_steps) for i, _ in runs)),
+        "tuning_order_linear": np.float64(d.holes.order_linear),
+        "pin_damping": np.float64(d.pin_damping),
+        "effective_fuselage_stiffness": np.float64(k),
+        "fuselage_damping": np.float64(c),
+    }
+    if np.isfinite(step_error):
+        facts["run_step_error_estimate"] = np.float64(step_error)
+    ds = SPEC.dataset({**series, **facts}, {"message": "; ".join(notes)})
     return ds
 
 

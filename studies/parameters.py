@@ -160,6 +160,10 @@ class Output:
         as one panel per case, any other history as one panel per output with one line per
         case. Every vector of a periodic model also gets its harmonic chart
         ``harmonics_<name>``; a non-periodic model gets its scalar results against its sweep.
+    optional
+        A scalar result only some runs have (e.g. a step-error estimate, not made when it is
+        not asked for): the run leaves it out rather than filling NaN, and the archive holds
+        NaN for the cases without it.
     """
 
     units: str
@@ -169,6 +173,7 @@ class Output:
     harmonics: bool = False
     components: tuple[str, str] | None = None
     figure: str | None = None
+    optional: bool = False
 
     @property
     def is_scalar(self) -> bool:
@@ -182,9 +187,28 @@ class Output:
         return {"units": self.units, "long_name": self.long_name}
 
 
+# What a simulation of a fixed duration (not per-rev periodic) reports of its run, as
+# declared scalar results.
+RUN_OUTPUTS: dict[str, Output] = {
+    "run_converged": Output("1", "1 if every time step converged, else 0 (the run stopped "
+                            "early)", dims=()),
+    "run_time_step": Output("s", "time step", dims=()),
+    "run_solver_seconds": Output("s", "time spent in the run", dims=()),
+}
+
+
+def run_facts(sim: Any, time_step: float) -> dict[str, np.generic]:
+    """The values of :data:`RUN_OUTPUTS` for a :func:`solver.simulation.simulate` result
+    ``sim`` (its ``converged`` and ``seconds``) at ``time_step`` (s)."""
+    return {"run_converged": np.int32(sim.converged), "run_time_step": np.float64(time_step),
+            "run_solver_seconds": np.float64(sim.seconds)}
+
+
 def check_outputs(outputs: Mapping[str, Output]) -> None:
     """Raise :class:`OutputError` if a set of declarations is inconsistent."""
     for name, out in outputs.items():
+        if out.optional and not out.is_scalar:
+            raise OutputError(f"output {name!r}: only a scalar result can be optional")
         if out.components is None:
             if out.harmonics and "time" not in out.dims:
                 raise OutputError(f"output {name!r}: harmonics need a 'time' dimension")
@@ -214,9 +238,12 @@ def output_dataset(outputs: Mapping[str, Output], values: Mapping[str, ArrayLike
         Name -> values (in the declared units, shaped as the declared ``dims``). Declarations
         that are coordinates (``dims == (name,)``) become coordinates.
     attrs
-        Global attributes of the result (run information such as ``converged``).
+        Global attributes of the result: only the case's ``message`` (what the run reports
+        in words) and, for a result that failed, ``status``; every run fact is a declared
+        output.
     partial
-        Allow declared outputs to be absent (e.g. a model variant without absorbers).
+        Allow declared outputs to be absent (e.g. a model variant without absorbers). Outputs
+        declared ``optional`` may be absent in any case.
 
     Returns
     -------
@@ -246,7 +273,8 @@ def output_dataset(outputs: Mapping[str, Output], values: Mapping[str, ArrayLike
         var = xr.Variable(decl.dims, arr, decl.attrs())
         (coords if decl.dims == (name,) else data)[name] = var
     if not partial:
-        missing = [n for n, d in outputs.items() if not d.is_vector and n not in values]
+        missing = [n for n, d in outputs.items()
+                   if not d.is_vector and not d.optional and n not in values]
         if missing:
             raise OutputError(f"declared output(s) not filled: {', '.join(missing)}")
     return xr.Dataset(data, coords=coords, attrs=dict(attrs or {}))

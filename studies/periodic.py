@@ -28,7 +28,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from solver.integrators import project_positions
 from solver.symmetry import affine_combination
-from studies.parameters import Param, ParameterError, Parameters
+from studies.parameters import Output, Param, ParameterError, Parameters
 from studies.progress import report
 
 Array = NDArray[np.float64]
@@ -58,6 +58,54 @@ PARAMETERS: dict[str, Param] = {
         8, "1", "revolutions whose changes estimate the periodic response by reduced-rank "
         "extrapolation of the marched revolutions (0: march only)", minimum=0, maximum=20),
 }
+
+
+# What every periodic model reports of its run, as declared scalar results (the archive keeps
+# them under these names): the recording's time base, how the periodic response was reached
+# and what it cost.
+RUN_OUTPUTS: dict[str, Output] = {
+    "run_hub_speed": Output("rad s-1", "rotor speed", dims=()),
+    "run_revolutions": Output("1", "revolutions recorded", dims=()),
+    "run_samples_per_rev": Output("1", "samples per revolution", dims=()),
+    "run_transient_revolutions": Output("1", "revolutions simulated before recording",
+                                        dims=()),
+    "run_simulated_revolutions": Output(
+        "1", "revolutions simulated in all: transient, recorded and those of the step-error "
+        "estimate's coarser step", dims=()),
+    "run_periodicity_change": Output(
+        "1", "last change of the harmonics between successive revolutions (or iterates of "
+        "the quarter-revolution map), relative to the largest", dims=()),
+    "run_extrapolated": Output("1", "1 if the recorded revolutions are the extrapolated limit "
+                               "of the marched ones, else 0", dims=()),
+    "run_extrapolation_residual": Output("1", "unexplained part of that extrapolation",
+                                         dims=()),
+    "run_shooting_restarts": Output("1", "restarts from an extrapolated periodic state",
+                                    dims=()),
+    "run_steps": Output("1", "time steps taken", dims=()),
+    "run_newton_iterations": Output("1", "Newton iterations taken", dims=()),
+    "run_solver_seconds": Output("s", "time spent in the run", dims=()),
+}
+
+
+def run_facts(rec: PeriodicRecord, *, hub_speed: float, revolutions: int,
+              samples_per_rev: int, transient: int, simulated: float, steps: int,
+              iterations: int, seconds: float) -> dict[str, np.generic]:
+    """The values of :data:`RUN_OUTPUTS` for a run that recorded ``rec`` (counts as int32,
+    as the archive stores them)."""
+    return {
+        "run_hub_speed": np.float64(hub_speed),
+        "run_revolutions": np.int32(revolutions),
+        "run_samples_per_rev": np.int32(samples_per_rev),
+        "run_transient_revolutions": np.int32(transient),
+        "run_simulated_revolutions": np.float64(simulated),
+        "run_periodicity_change": np.float64(rec.change),
+        "run_extrapolated": np.int32(rec.extrapolated),
+        "run_extrapolation_residual": np.float64(rec.residual),
+        "run_shooting_restarts": np.int32(rec.restarts),
+        "run_steps": np.int32(steps),
+        "run_newton_iterations": np.int32(iterations),
+        "run_solver_seconds": np.float64(seconds),
+    }
 
 
 def check(p: Parameters) -> None:

@@ -222,6 +222,16 @@ OUTPUTS: dict[str, Output] = {
     "fuselage_moment_fixed": Output(
         "N m", "fuselage-beam root bending moments (M11, M22), fixed frame",
         components=("fuselage_moment_x_fixed", "fuselage_moment_y_fixed")),
+    "thrust_coefficient": Output("1", "thrust coefficient C_T = T / (ρ π R² (Ω R)²), mean "
+                                 "over the recorded revolutions", dims=()),
+    "thrust_coefficient_over_solidity": Output("1", "blade loading C_T/σ", dims=()),
+    "advance_ratio": Output("1", "advance ratio μ = U / (Ω R)", dims=()),
+    "effective_fuselage_stiffness": Output(
+        "N m-1", "in-plane stiffness of the fuselage-beam at the hub, 3 EI / L^3 (EI times "
+        "fuselage_bending_stiffness_scale)", dims=()),
+    "fuselage_damping": Output("N s m-1", "in-plane damper at the shaft head", dims=()),
+    **periodic.RUN_OUTPUTS,
+    "run_unknowns": Output("1", "unknowns of the multibody model", dims=()),
 }
 
 
@@ -637,7 +647,7 @@ def simulate(p: Parameters) -> xr.Dataset:
     thrust = float(col["thrust"].mean())
     disk = math.pi * UH60A.radius**2
     ct = thrust / (p.air_density * disk * (omega * UH60A.radius) ** 2)
-    ds = SPEC.dataset({
+    series = {
         "time": t,
         "bifilar": np.arange(N_BIFILARS),
         "hub_x_fixed": col["x"],
@@ -658,22 +668,22 @@ def simulate(p: Parameters) -> xr.Dataset:
         "blade_root_shear_lag": col["v2"],
         "blade_root_axial": col["n1"],
         "blade_root_torsion": col["t1"],
-    })
-    ds.attrs.update(hub_speed=float(omega), revolutions=int(p.revolutions),
-                    samples_per_rev=int(nrev), extrapolated=int(rec.extrapolated),
-                    extrapolation_residual=float(rec.residual),
-                    transient_revolutions=int(
-                        rec.transient + p.settle_revolutions),
-                    periodicity_change=float(rec.change),
-                    shooting_restarts=int(rec.restarts), message=rec.note,
-                    tuning_order_linear=float(parts.holes.order_linear),
-                    thrust_coefficient=ct, thrust_coefficient_over_solidity=ct / UH60A.solidity,
-                    advance_ratio=p.flight_speed / (omega * UH60A.radius),
-                    fuselage_stiffness=float(parts.fuselage_stiffness),
-                    fuselage_damping=float(parts.fuselage_damping),
-                    simulated_revolutions=float(steps / nrev),
-                    solver_seconds=time.perf_counter() - t0, steps=int(steps),
-                    newton_iterations=int(iterations), unknowns=int(system.n))
+    }
+    facts = {
+        **periodic.run_facts(
+            rec, hub_speed=omega, revolutions=p.revolutions, samples_per_rev=nrev,
+            transient=rec.transient + p.settle_revolutions, simulated=steps / nrev,
+            steps=steps, iterations=iterations, seconds=time.perf_counter() - t0),
+        "run_unknowns": np.int32(system.n),
+        "tuning_order_linear": np.float64(d.holes.order_linear),
+        "pin_damping": np.float64(d.pin_damping),
+        "thrust_coefficient": np.float64(ct),
+        "thrust_coefficient_over_solidity": np.float64(ct / UH60A.solidity),
+        "advance_ratio": np.float64(p.flight_speed / (omega * UH60A.radius)),
+        "effective_fuselage_stiffness": np.float64(parts.fuselage_stiffness),
+        "fuselage_damping": np.float64(parts.fuselage_damping),
+    }
+    ds = SPEC.dataset({**series, **facts}, {"message": rec.note})
     return ds
 
 

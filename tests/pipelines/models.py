@@ -31,6 +31,7 @@ import numpy as np
 import xarray as xr
 
 from studies.parameters import ModelSpec, Output, Param, ParameterError
+from studies.periodic import RUN_OUTPUTS
 from studies.progress import report
 from studies.registry import register
 
@@ -91,6 +92,9 @@ OUTPUTS: dict[str, Output] = {
     "bifilar_cm_displacement": Output("m", "bifilar centre of mass displacement, fixed frame",
                                       components=("bifilar_cm_x_fixed", "bifilar_cm_y_fixed"),
                                       figure="orbits"),
+    # the recording's time base and transient, as every periodic model reports them
+    **{name: RUN_OUTPUTS[name] for name in ("run_hub_speed", "run_revolutions",
+                                            "run_samples_per_rev", "run_transient_revolutions")},
 }
 
 
@@ -217,9 +221,11 @@ def run(params: dict[str, Any]) -> xr.Dataset:
             "bifilar_cm_x_fixed": series["absorber_x"],
             "bifilar_cm_y_fixed": series["absorber_y"],
             "pin_angle": pins,
+            "run_hub_speed": np.float64(omega),
+            "run_revolutions": np.int32(revs),
+            "run_samples_per_rev": np.int32(n),
+            "run_transient_revolutions": np.int32(skip),
         },
-        {"hub_speed": omega, "revolutions": revs, "samples_per_rev": n,
-         "transient_revolutions": skip},
     )
     if params["fail"] == "report":
         ds.attrs.update(status="failed", message="solver did not converge (test report)")

@@ -253,7 +253,7 @@ def test_free_modes(zeta):
 
 # ------------------------------------------------------------ full vs equivalent (test 3)
 def _last_rev(ds):
-    n = int(ds.attrs["samples_per_rev"])
+    n = int(ds["run_samples_per_rev"].item())
     f = (ds.hub_force_x_fixed.values + 1j * ds.hub_force_y_fixed.values)[-n:]
     cm = (ds.bifilar_cm_x_fixed.values + 1j * ds.bifilar_cm_y_fixed.values)[-n:]
     hub = (ds.hub_x_rotating.values + 1j * ds.hub_y_rotating.values)[-n:]
@@ -279,7 +279,7 @@ def test_hub_equivalent_matches_full_bifilars_at_small_amplitude():
     full = run({"bifilar": "free", **common})
     eq = run({"bifilar": "equivalent", **common})
     a, b = _last_rev(full), _last_rev(eq)
-    assert eq.attrs["pin_damping"] == full.attrs["pin_damping"]
+    assert eq["pin_damping"].item() == full["pin_damping"].item()
 
     def rel(k):
         return np.abs(b[k] - a[k]) / np.abs(a[k])

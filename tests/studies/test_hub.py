@@ -153,8 +153,8 @@ def test_linear_response_is_the_linear_models_periodic_response(bifilar):
     whirl, zz, aa = linear_response(p, design(p))
     assert whirl == pytest.approx(p.hub_speed * np.array([4.0, -4.0]))
     ds = run({"bifilar": bifilar})
-    assert ds.attrs["richardson"] == 1 and ds.attrs["message"] == ""
-    n = ds.attrs["samples_per_rev"]
+    assert ds["run_richardson"].item() == 1 and ds.attrs["message"] == ""
+    n = ds["run_samples_per_rev"].item()
     t = ds.time.values[-n:]
     z = (ds.hub_x_fixed.values + 1j * ds.hub_y_fixed.values)[-n:]
     phi = np.radians(ds.pin_angle.values[:, -n:])
@@ -245,7 +245,7 @@ def test_nonlinear_and_linear_starts_are_nearly_periodic():
                                  ("rest", None, 0.02)):
         if passes is not None:
             ds = run({**given, "initial_state": start, "periodic_tolerance": passes})
-            assert ds.attrs["transient_revolutions"] == 2
+            assert ds["run_transient_revolutions"].item() == 2
         with pytest.raises(RuntimeError, match="not periodic after 2 revolutions"):
             run({**given, "initial_state": start, "periodic_tolerance": fails})
 
@@ -263,32 +263,33 @@ def test_default_run_stores_the_step_error_of_its_harmonics():
     from studies.periodic import referred_harmonics, richardson
 
     own = run({"richardson": False})
-    assert own.attrs["message"] == "" and own.attrs["estimate_samples_per_rev"] == 20
+    assert own.attrs["message"] == "" and own["run_estimate_samples_per_rev"].item() == 20
     # at most 8 revolutions per case, the coarser step's included (measured 6.5)
-    assert own.attrs["simulated_revolutions"] <= 8
-    assert 1.0 <= own.attrs["estimate_revolutions"] <= 4.0 and own.attrs["richardson"] == 0
+    assert own["run_simulated_revolutions"].item() <= 8
+    assert 1.0 <= own["run_estimate_revolutions"].item() <= 4.0
+    assert own["run_richardson"].item() == 0
     coarse = run({"steps_per_rev": 20, "richardson": False, "error_estimate": False})
-    assert np.isnan(coarse.attrs["step_error_estimate"])
-    assert coarse.attrs["estimate_revolutions"] == 0
-    omega = own.attrs["hub_speed"]
+    assert "run_step_error_estimate" not in coarse
+    assert coarse["run_estimate_revolutions"].item() == 0
+    omega = own["run_hub_speed"].item()
     _, est = richardson(hub_samples(own), hub_samples(coarse), omega, 8, order=4)
     assert 1e-3 < est.max() < 3e-3
-    assert own.attrs["step_error_estimate"] == pytest.approx(est.max(), rel=0.03)
+    assert own["run_step_error_estimate"].item() == pytest.approx(est.max(), rel=0.03)
     # the default: the same run and estimate, its harmonics 0-8 moved by c(h) - c(2h) over 15.
     # The same to roundoff, not to the bit: the secant step over shooting's nearly parallel
     # iterates amplifies roundoff, and two runs in one process need not round alike (measured
     # 2e-8 apart in this test under pytest, identical in a standalone process)
     ds = run({})
-    assert ds.attrs["richardson"] == 1 and ds.attrs["message"] == ""
-    assert ds.attrs["step_error_estimate"] == pytest.approx(own.attrs["step_error_estimate"],
-                                                            rel=1e-6)
+    assert ds["run_richardson"].item() == 1 and ds.attrs["message"] == ""
+    assert ds["run_step_error_estimate"].item() == pytest.approx(
+        own["run_step_error_estimate"].item(), rel=1e-6)
     c_own, c_ex = (referred_harmonics(hub_samples(d)[-40:], omega, 8) for d in (own, ds))
     scale = np.abs(c_own).max(axis=0)
     moved = np.max(np.abs(c_ex - c_own) / scale)
-    assert moved == pytest.approx(ds.attrs["step_error_estimate"], rel=1e-6)
+    assert moved == pytest.approx(ds["run_step_error_estimate"].item(), rel=1e-6)
     # harmonic 8 needs 18 samples per revolution at the coarser step: none below 40 steps/rev
     low = run({"bifilar": "locked", "steps_per_rev": 32})
-    assert np.isnan(low.attrs["step_error_estimate"]) and low.attrs["richardson"] == 0
+    assert "run_step_error_estimate" not in low and low["run_richardson"].item() == 0
     assert ("no step-error estimate at steps_per_rev = 32, harmonics not extrapolated"
             in low.attrs["message"])
 
@@ -305,7 +306,7 @@ def _exact_error(given: dict):
     d = hub.design(p)
 
     def error(ds) -> float:
-        rows = hub_samples(ds)[-ds.attrs["samples_per_rev"]:]
+        rows = hub_samples(ds)[-ds["run_samples_per_rev"].item():]
         a, b = (referred_harmonics(r, p.hub_speed, 8)
                 for r in (rows, hub.reduced_samples(p, d, rows[:, 0])))
         return float(np.max(np.abs(a - b) / np.abs(b).max(axis=0)))
@@ -331,18 +332,18 @@ def test_default_step_gives_the_exact_harmonics_in_at_most_8_revolutions():
     error = _exact_error({})
     own = run({"richardson": False})
     assert error(own) < 5e-3
-    assert own.attrs["step_error_estimate"] == pytest.approx(error(own), rel=0.25)
-    assert own.attrs["simulated_revolutions"] <= 8
-    assert own.attrs["composition"] == "suzuki" and own.attrs["message"] == ""
+    assert own["run_step_error_estimate"].item() == pytest.approx(error(own), rel=0.25)
+    assert own["run_simulated_revolutions"].item() <= 8
+    assert own.attrs["message"] == ""
     assert error(run({})) < 5e-4
     e24, e48 = (error(run({"steps_per_rev": n, "richardson": False})) for n in (24, 48))
     assert 3.5 < np.log2(e24 / e48) < 4.5
     corner = {"tuning_order": 3.3, "fuselage_stiffness_scale": 1.5}
     error = _exact_error(corner)
     own = run({**corner, "richardson": False})
-    assert error(own) > 5e-3 and own.attrs["step_error_estimate"] > 5e-3
-    assert own.attrs["step_error_estimate"] == pytest.approx(error(own), rel=0.25)
-    assert own.attrs["simulated_revolutions"] <= 8
+    assert error(own) > 5e-3 and own["run_step_error_estimate"].item() > 5e-3
+    assert own["run_step_error_estimate"].item() == pytest.approx(error(own), rel=0.25)
+    assert own["run_simulated_revolutions"].item() <= 8
     assert error(run(corner)) < 3e-3
 
 
@@ -361,9 +362,9 @@ def test_sixty_case_sweep_takes_at_most_8_revolutions_per_case_at_the_exact_harm
         for scale in (0.5, 0.75, 1.0, 1.25, 1.5):
             given = {"tuning_order": float(order), "fuselage_stiffness_scale": scale}
             ds = run(given)
-            assert ds.attrs["message"] == "" and ds.attrs["richardson"] == 1, given
-            assert ds.attrs["shooting_restarts"] >= 1, given
-            worst[(order, scale)] = (ds.attrs["simulated_revolutions"],
+            assert ds.attrs["message"] == "" and ds["run_richardson"].item() == 1, given
+            assert ds["run_shooting_restarts"].item() >= 1, given
+            worst[(order, scale)] = (ds["run_simulated_revolutions"].item(),
                                      _exact_error(given)(ds))
     revolutions, errors = np.array(list(worst.values())).T
     assert revolutions.max() <= 8, max(worst.items(), key=lambda kv: kv[1][0])

@@ -160,7 +160,7 @@ def _harmonics(ds, n):
     rows = np.column_stack([ds["time"].values[-n:], *(ds[k].values[..., -n:].T for k in (
         "hub_x_rotating", "hub_y_rotating", "hub_force_x_fixed", "hub_force_y_fixed",
         "pin_angle"))])
-    return referred_harmonics(rows, ds.attrs["hub_speed"], 8)
+    return referred_harmonics(rows, ds["run_hub_speed"].item(), 8)
 
 
 @pytest.mark.slow
@@ -170,14 +170,14 @@ def test_shooting_gives_the_long_march_periodic_response():
     ref = hub.run({"shooting_window": 0, "extrapolation_window": 0, "richardson": False,
                    "error_estimate": False, "periodic_tolerance": 1e-5, "max_revolutions": 400})
     shot = hub.run({"richardson": False, "error_estimate": False})
-    n = shot.attrs["samples_per_rev"]
+    n = shot["run_samples_per_rev"].item()
     a, b = _harmonics(shot, n), _harmonics(ref, n)
     scale = np.abs(b).max(axis=0)
     # measured 1.7e-4 of each signal's largest harmonic (tolerance 1e-3), 7.5 revolutions
     # against 40 (transient_revolutions counts the started quarter revolutions, rounded up)
     assert np.max(np.abs(a - b) / scale) < 1e-3
-    assert shot.attrs["transient_revolutions"] + shot.attrs["revolutions"] <= 8
-    assert shot.attrs["shooting_restarts"] >= 1 and shot.attrs["message"] == ""
+    assert shot["run_transient_revolutions"].item() + shot["run_revolutions"].item() <= 8
+    assert shot["run_shooting_restarts"].item() >= 1 and shot.attrs["message"] == ""
     # the steady response is symmetric: a quarter revolution later, bifilar j does what
     # bifilar j + 1 did (pin angles, degrees), within the periodicity (measured 2.2e-4)
     pins = shot["pin_angle"].values[:, -n:]
@@ -191,13 +191,13 @@ def test_locked_hub_shoots_in_a_few_revolutions():
     # four quarter revolutions explains it (measured: 1.3e-7 from the 400-revolution march,
     # whose own tolerance is 1e-6, after 3.25 revolutions from the linear start or from rest)
     ds = hub.run({"bifilar": "locked", "richardson": False, "error_estimate": False})
-    assert ds.attrs["shooting_restarts"] == 1
-    assert ds.attrs["transient_revolutions"] + ds.attrs["revolutions"] <= 4
+    assert ds["run_shooting_restarts"].item() == 1
+    assert ds["run_transient_revolutions"].item() + ds["run_revolutions"].item() <= 4
     marched = hub.run({"bifilar": "locked", "shooting_window": 0, "extrapolation_window": 0,
                        "richardson": False, "error_estimate": False,
                        "periodic_tolerance": 1e-6,
                        "max_revolutions": 400})
-    n = ds.attrs["samples_per_rev"]
+    n = ds["run_samples_per_rev"].item()
     a, b = _harmonics(ds, n), _harmonics(marched, n)
     live = np.abs(b).max(axis=0) > 0
     assert np.max(np.abs(a - b)[:, live] / np.abs(b).max(axis=0)[live]) < 1e-5
