@@ -43,19 +43,29 @@ import itertools
 import os
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
 
 from pipelines.archive import STATUS_OK, ArchiveError, _upsample, open_archive, status_counts
 from studies.parameters import ModelSpec, Output
 
-Cases = list[tuple[str, dict[str, int], bool]]
 
-# More bars than this per harmonic group are unreadable: a sweep switches to line plots.
-MAX_BAR_CASES = 8
+class Case(NamedTuple):
+    """One case of an archive as drawn: legend label, ``isel`` indexers, whether it finished
+    ok, and its style (``color``, ``linestyle``, ``marker``), the same in every figure."""
+
+    label: str
+    sel: dict[str, int]
+    ok: bool
+    style: dict[str, Any]
+
+
+Cases = list[Case]
+
 # Harmonics drawn for a four-bladed rotor: either side of 4P in the rotating frame, 4P and its
 # double in the fixed frame (the others are summarized in a line of text).
 ROTATING_HARMONICS = (3, 5)
@@ -65,6 +75,15 @@ FIXED_HARMONICS = (4, 8)
 ORBIT_POINTS = 720
 # Cases per time-history figure (one panel each for pin angles, one line each otherwise).
 CASES_PER_PAGE = 8
+# A harmonic whose amplitude stays below this share of the figure's largest is numerical noise
+# (roundoff of the Fourier analysis, about 1e-14 relative): its panel or bar group is left out.
+NOISE_LEVEL = 1e-6
+# Line styles and markers cycled with the colours, so that cases whose curves coincide (a
+# detuned case over the tuned one) stay distinguishable; markers spaced by this share of the
+# axes' diagonal along each curve.
+LINE_STYLES = ("-", "--", "-.", ":")
+MARKERS = ("o", "s", "^", "D", "v", "P", "X", "*")
+MARKER_SPACING = 0.12
 FORMATS = ("png", "pdf")
 DPI = 150
 
@@ -97,18 +116,41 @@ def _format(value: Any) -> str:
     return str(value.item() if isinstance(value, np.generic) else value)
 
 
-def _cases(ds: xr.Dataset) -> list[tuple[str, dict[str, int], bool]]:
-    """Every case of the archive as ``(legend label, isel indexers, finished ok)``."""
+def _styles(n: int) -> list[dict[str, Any]]:
+    """A colour, line style and marker for each of ``n`` curves, all distinct pairs."""
+    colors = _colors(n)
+    return [{"color": colors[i], "linestyle": LINE_STYLES[i % len(LINE_STYLES)],
+             "marker": MARKERS[i % len(MARKERS)]} for i in range(n)]
+
+
+def _markevery(i: int, n: int) -> tuple[float, float]:
+    """Markers every :data:`MARKER_SPACING` of the axes' diagonal along the drawn path (evenly
+    spread whatever the sampling, also on an orbit that loops four times a revolution),
+    shifted for curve ``i`` of ``n`` so that coinciding curves show each other's markers."""
+    return MARKER_SPACING * i / max(n, 1), MARKER_SPACING
+
+
+def _line(ax: Any, x: np.ndarray, y: np.ndarray, style: dict[str, Any], index: int, count: int,
+          **kwargs: Any) -> None:
+    """A curve in a case's (or a group's) style, markers spread along it."""
+    ax.plot(x, y, **style, markevery=_markevery(index, count), markersize=4,
+            mfc="none", **kwargs)
+
+
+def _cases(ds: xr.Dataset) -> Cases:
+    """Every case of the archive, each with its fixed style (by its position in the archive,
+    so a case looks the same in every figure whichever cases a figure draws)."""
     dims = _case_dims(ds)
+    styles = _styles(int(np.prod(ds["status"].shape)))
     out = []
-    for index in np.ndindex(*ds["status"].shape):
+    for number, index in enumerate(np.ndindex(*ds["status"].shape)):
         sel = dict(zip(dims, index, strict=True))
         if dims == ("case",):
             label = str(ds["case_name"].values[index[0]]) if "case_name" in ds else str(index[0])
         else:
             label = ", ".join(f"{d}={_format(ds[d].values[i])}" for d, i in sel.items())
         ok = int(ds["status"].values[index]) == STATUS_OK
-        out.append((label if ok else f"{label} (failed)", sel, ok))
+        out.append(Case(label if ok else f"{label} (failed)", sel, ok, styles[number]))
     return out
 
 
@@ -139,7 +181,12 @@ def _legend(fig: Figure, ax: Any) -> None:
 def _axis_label(attrs: dict[str, Any], fallback: str) -> str:
     units = attrs.get("units", "")
     name = attrs.get("long_name") or fallback
-    return name if units in ("", "1") else f"{name} ({units})"
+    return f"{name} ({_units_label(units)})"
+
+
+def _units_label(units: str) -> str:
+    """Units as an axis shows them: a ratio (units "1" or none) reads "dimensionless"."""
+    return "dimensionless" if units in ("", "1") else units
 
 
 def _psi_axis(ax: Any) -> None:
@@ -179,20 +226,40 @@ def _rest_summary(var: xr.DataArray, shown: Sequence[int], scale: float, units: 
             + (f" ({100 * share:.2g} % of the largest shown)" if np.isfinite(share) else ""))
 
 
+def _significant(var: xr.DataArray, harmonics: Sequence[int]) -> list[int]:
+    """Those of ``harmonics`` whose largest amplitude (over every case and direction) reaches
+    :data:`NOISE_LEVEL` of the largest among them: the others are roundoff, not response."""
+    if not harmonics:
+        return []
+    values = np.abs(var.sel(harmonic=list(harmonics)).transpose(..., "harmonic").values)
+    peak = np.where(np.isfinite(values), values, 0.0).reshape(-1, len(harmonics)).max(axis=0)
+    return [h for h, p in zip(harmonics, peak, strict=True) if p >= NOISE_LEVEL * peak.max()]
+
+
+def _frame_harmonics(ds: xr.Dataset, var: xr.DataArray, name: str) -> list[int]:
+    """The frame's harmonics (:func:`frame_harmonics`) archived and above noise level."""
+    return _significant(var, [h for h in frame_harmonics(name) if h in ds["harmonic"].values])
+
+
 def _bar_panel(ax: Any, ds: xr.Dataset, name: str, cases: Cases, shown: Sequence[int],
-               scale: float, colors: Sequence[Any]) -> None:
-    """Grouped bars: one group per (harmonic, direction), one bar per case."""
+               scale: float) -> None:
+    """Grouped bars: one group per (harmonic, direction), one bar per case in its colour."""
     var = ds[name]
     groups = [(h, d) for h in shown for d in ds["direction"].values]
     width = 0.8 / len(cases)
     x = np.arange(len(groups))
-    for i, (label, sel, _ok) in enumerate(cases):
-        amp = [float(var.isel(sel).sel(direction=d, harmonic=h)) * scale for h, d in groups]
-        ax.bar(x - 0.4 + (i + 0.5) * width, amp, width, label=label, color=colors[i],
-               edgecolor="black", linewidth=0.5)
+    for i, case in enumerate(cases):
+        amp = [float(var.isel(case.sel).sel(direction=d, harmonic=h)) * scale for h, d in groups]
+        ax.bar(x - 0.4 + (i + 0.5) * width, amp, width, label=case.label,
+               color=case.style["color"], edgecolor="black", linewidth=0.5)
     ax.set_xticks(x, [f"{h}P {d}" for h, d in groups])
     ax.grid(True, axis="y", alpha=0.3)
     ax.set_ylim(bottom=0)
+
+
+def _bar_width(bars: int) -> float:
+    """Figure width (inches) that keeps ``bars`` bars readable."""
+    return max(9.0, 1.5 + 0.2 * bars)
 
 
 def _harmonic_bars(ds: xr.Dataset, name: str, title: str, out_dir: Path,
@@ -200,14 +267,15 @@ def _harmonic_bars(ds: xr.Dataset, name: str, title: str, out_dir: Path,
     cases = _cases(ds)
     var = ds[name]
     scale, units = _display_units(var.attrs.get("units", ""), var.values)
-    shown = [h for h in frame_harmonics(name) if h in ds["harmonic"].values]
-    fig = Figure(figsize=(9, 5.5), layout="constrained")
+    shown = _frame_harmonics(ds, var, name)
+    fig = Figure(figsize=(_bar_width(len(cases) * len(shown) * ds.sizes["direction"]), 5.5),
+                 layout="constrained")
     ax = fig.subplots()
-    _bar_panel(ax, ds, name, cases, shown, scale, _colors(len(cases)))
+    _bar_panel(ax, ds, name, cases, shown, scale)
     ax.set_ylabel(f"amplitude ({units})")
     ax.set_xlabel("harmonic (cycles per rotor revolution) and in-plane direction\n"
                   + _rest_summary(var, shown, scale, units), fontsize="small")
-    fig.suptitle(title)
+    fig.suptitle(title, wrap=True)
     _legend(fig, ax)
     return _save(fig, out_dir, f"harmonics_{name}", formats)
 
@@ -226,26 +294,25 @@ def _comparison(ds: xr.Dataset, spec: ModelSpec, pair: tuple[int, int], out_dir:
     cases = _cases(ds)
     chosen = [cases[i] for i in pair]
     names = [n for n, d in spec.outputs.items() if d.is_vector and n in ds]
-    if not names or not all(ok for *_, ok in chosen):
+    if not names or not all(case.ok for case in chosen):
         return []
     cols = 2 if len(names) > 1 else 1
     rows = -(-len(names) // cols)
     fig = Figure(figsize=(5.6 * cols, 1.6 + 3.3 * rows), layout="constrained")
     axes = fig.subplots(rows, cols, squeeze=False).ravel()
-    colors = _colors(2)
     for ax, name in zip(axes, names, strict=False):
         var = ds[name]
         scale, units = _display_units(var.attrs.get("units", ""), var.values)
-        shown = [h for h in frame_harmonics(name) if h in ds["harmonic"].values]
-        _bar_panel(ax, ds, name, chosen, shown, scale, colors)
+        sub = var.isel(case=list(pair))
+        shown = _frame_harmonics(ds, sub, name)
+        _bar_panel(ax, ds, name, chosen, shown, scale)
         ax.set_ylabel(f"amplitude ({units})")
         ax.set_title(spec.outputs[name].long_name, fontsize="medium", wrap=True)
-        sub = var.isel(case=list(pair))
         ax.set_xlabel(_rest_summary(sub, shown, scale, units).replace("; ", "\n", 1),
                       fontsize="x-small", color="0.3")
     for ax in axes[len(names):]:
         ax.set_visible(False)
-    fig.suptitle(f"Case {chosen[0][0]} against case {chosen[1][0]}")
+    fig.suptitle(f"Case {chosen[0].label} against case {chosen[1].label}", wrap=True)
     _legend(fig, axes[0])
     return _save(fig, out_dir, f"compare_case{pair[0]}_vs_case{pair[1]}", formats)
 
@@ -278,15 +345,17 @@ def _harmonic_lines(ds: xr.Dataset, name: str, title: str, out_dir: Path,
     scale, units = _display_units(var.attrs.get("units", ""), var.values)
     # NaN where a case failed; the line then has a gap rather than a false value.
     values = var.where(ds["status"] == STATUS_OK)
-    picks = list(chosen) if chosen else [h for h in frame_harmonics(name)
-                                         if h in ds["harmonic"].values]
+    picks = _significant(values, [h for h in chosen if h in ds["harmonic"].values]) if chosen \
+        else _frame_harmonics(ds, values, name)
+    if not picks:
+        return []
     x = ds[first].values
     xattrs = dict(ds[first].attrs)
     combos = list(itertools.product(*(range(ds.sizes[d]) for d in others)))
     colors = _colors(len(combos))
     # x and y of one harmonic share a panel (solid and dashed): for a circular whirl they
     # coincide, and two identical panels would say nothing more
-    fig = Figure(figsize=(6 * len(picks), 5.2), layout="constrained")
+    fig = Figure(figsize=(max(8.0, 6 * len(picks)), 5.2), layout="constrained")
     axes = fig.subplots(1, len(picks), squeeze=False)[0]
     styles = ("-", "--", ":", "-.")
     for ax, k in zip(axes, picks, strict=True):
@@ -305,7 +374,7 @@ def _harmonic_lines(ds: xr.Dataset, name: str, title: str, out_dir: Path,
         ax.set_xlabel(_axis_label(xattrs, first))
         ax.grid(True, alpha=0.3)
         ax.set_ylim(bottom=0)
-    fig.suptitle(f"{title} against {first}")
+    fig.suptitle(f"{title} against {first}", wrap=True)
     _legend(fig, axes[0])
     return _save(fig, out_dir, f"harmonics_{name}_vs_{first}", formats)
 
@@ -328,136 +397,193 @@ def _over(ds: xr.Dataset) -> str:
     return "over one revolution" if "psi" in ds.coords else "against time"
 
 
+def _pin_pair(ds: xr.Dataset, index: str) -> list[tuple[int, str, str]]:
+    """The entries of an indexed history drawn, as ``(position, label, line style)``.
+
+    For the bifilars (an even number, evenly spaced), the paper's Fig. 14: pin A, the first
+    bifilar, solid, and pin B, the bifilar 180° from it, dash-dotted; their angles are in
+    antiphase for a response at 3P. Otherwise every entry, one line style each.
+    """
+    n = ds.sizes[index]
+    if index.startswith("bifilar") and n >= 2 and n % 2 == 0:
+        values = ds[index].values
+        return [(0, f"pin A (bifilar {_format(values[0])})", "-"),
+                (n // 2, f"pin B (bifilar {_format(values[n // 2])}, 180° from A)", "-.")]
+    return [(k, f"{index} {_format(v)}", LINE_STYLES[k % len(LINE_STYLES)])
+            for k, v in enumerate(ds[index].values)]
+
+
 def _indexed_history(ds: xr.Dataset, name: str, stem: str, cases: Cases, out_dir: Path,
                      formats: Sequence[str]) -> list[Path]:
-    """A history with an extra dimension (e.g. one per bifilar): one panel per case."""
+    """A history with an extra dimension (e.g. one per bifilar): one panel per case, in the
+    case's colour, one line style per entry drawn (:func:`_pin_pair`)."""
     var = ds[name]
     inner = [d for d in var.dims if d not in _case_dims(ds) and d not in ("time_in_rev",
                                                                           "sample")]
     index = inner[0]
-    shown = [c for c in cases if c[2] and _swings(var.isel(c[1]).values)]
+    entries = _pin_pair(ds, index)
+    shown = [c for c in cases if c.ok and _swings(var.isel(c.sel).values)]
     units = var.attrs.get("units", "")
-    styles = ("-", "-.", "--", ":")
     paths: list[Path] = []
     pages = _pages(shown)
     for page, chunk in enumerate(pages):
         fig = Figure(figsize=(8, 1.0 + 2.2 * len(chunk)), layout="constrained")
         axes = fig.subplots(len(chunk), 1, sharex=True, squeeze=False)[:, 0]
-        for ax, (label, sel, _ok) in zip(axes, chunk, strict=True):
-            x, xlabel = _time_axis(ds, sel)
-            values = var.isel(sel)
-            for k, item in enumerate(ds[index].values):
-                ax.plot(x, values.sel({index: item}).values, styles[k % len(styles)],
-                        color=_colors(ds.sizes[index])[k], label=f"{index} {_format(item)}")
-            ax.set_title(label, fontsize="medium")
+        for ax, case in zip(axes, chunk, strict=True):
+            x, xlabel = _time_axis(ds, case.sel)
+            values = var.isel(case.sel)
+            for k, label, linestyle in entries:
+                ax.plot(x, values.isel({index: k}).values, linestyle=linestyle,
+                        color=case.style["color"], label=label)
+            ax.set_title(case.label, fontsize="medium")
             ax.set_ylabel(units or name)
             _finish_axis(ax, ds)
         axes[-1].set_xlabel(xlabel)
-        _legend(fig, axes[0])
-        fig.suptitle(f"{var.attrs.get('long_name', name)} {_over(ds)}")
+        # one legend for every panel: the entries by line style (the colour is the case's)
+        handles = [Line2D([], [], color="0.25", linestyle=ls) for _k, _l, ls in entries]
+        fig.legend(handles, [lab for _k, lab, _ls in entries], loc="outside lower center",
+                   ncols=len(entries), fontsize="small")
+        fig.suptitle(f"{var.attrs.get('long_name', name)} {_over(ds)}", wrap=True)
         paths += _save(fig, out_dir, _page_stem(stem, page, len(pages)), formats)
     return paths
 
 
+def _round_to(value: float, quantum: float) -> float:
+    """``value`` rounded to a multiple of ``quantum`` (unchanged if ``quantum`` is 0); 0, not
+    -0."""
+    if not quantum > 0 or not np.isfinite(value):
+        return value
+    return float(np.round(value / quantum) * quantum) + 0.0
+
+
+def _time_dims(ds: xr.Dataset, name: str) -> list[str]:
+    """The dimensions of a history other than the case dimensions (its samples in time)."""
+    return [d for d in ds[name].dims if d not in _case_dims(ds)]
+
+
 def _orbits(ds: xr.Dataset, vectors: dict[str, Output], stem: str, cases: Cases,
             out_dir: Path, formats: Sequence[str]) -> list[Path]:
-    """In-plane vectors as orbits: one panel per vector, one line per case."""
-    ok = [c for c in cases if c[2]]
+    """In-plane vectors as orbits about their mean: one panel per vector, one line per case.
+
+    The mean (the static deflection, e.g. the hub's sag under the rotor's steady load) is
+    taken out and written in the legend: the orbit is the vibration, drawn at its own scale.
+    """
+    ok = [c for c in cases if c.ok]
     by_units: dict[str, tuple[float, str]] = {}
     for units in {v.units for v in vectors.values()}:
         by_units[units] = _display_units(units, np.concatenate(
-            [ds[c].values.ravel() for v in vectors.values() if v.units == units
-             for c in v.components or ()]))
+            [(ds[c] - ds[c].mean(_time_dims(ds, c))).values.ravel() for v in vectors.values()
+             if v.units == units for c in v.components or ()]))
     paths: list[Path] = []
     pages = _pages(ok)
     for page, chunk in enumerate(pages):
         fig = Figure(figsize=(5.2 * len(vectors), 5.8), layout="constrained")
         axes = fig.subplots(1, len(vectors), squeeze=False)[0]
-        colors = _colors(len(chunk))
         for ax, vector in zip(axes, vectors.values(), strict=True):
             cx, cy = vector.components or ("", "")
             scale, units = by_units[vector.units]
-            for (label, sel, _ok), color in zip(chunk, colors, strict=True):
-                x = ds[cx].isel(sel).values * scale
-                y = ds[cy].isel(sel).values * scale
+            for i, case in enumerate(chunk):
+                x = ds[cx].isel(case.sel).values * scale
+                y = ds[cy].isel(case.sel).values * scale
+                mean = (np.nanmean(x), np.nanmean(y))
+                x, y = x - mean[0], y - mean[1]
+                # the mean to a thousandth of the orbit's size (its roundoff is not news)
+                size = float(np.nanmax(np.hypot(x, y))) if np.isfinite(x).any() else 0.0
+                shown = [_round_to(m, 1e-3 * size) for m in mean]
                 if "psi" in ds.coords and np.isfinite(x).all() and np.isfinite(y).all():
                     # Smooth and closed: Fourier interpolation of the periodic revolution.
                     x = _upsample(x, max(ORBIT_POINTS, x.size))
                     y = _upsample(y, max(ORBIT_POINTS, y.size))
                     x, y = np.append(x, x[0]), np.append(y, y[0])
-                ax.plot(x, y, color=color, label=label)
+                _line(ax, x, y, case.style, i, len(chunk),
+                      label=f"{case.label}; mean ({shown[0]:.3g}, {shown[1]:.3g}) {units}")
             ax.set_aspect("equal", adjustable="datalim")
             ax.set_title(vector.long_name, fontsize="medium", wrap=True)
-            ax.set_xlabel(f"x ({units})")
-            ax.set_ylabel(f"y ({units})")
+            ax.set_xlabel(f"x about the mean ({units})")
+            ax.set_ylabel(f"y about the mean ({units})")
             ax.grid(True, alpha=0.3)
-        _legend(fig, axes[0])
-        fig.suptitle(f"In-plane orbits {_over(ds)}")
+            ax.legend(fontsize="x-small", loc="upper center", bbox_to_anchor=(0.5, -0.12))
+        fig.suptitle(f"In-plane orbits about their mean {_over(ds)}", wrap=True)
         paths += _save(fig, out_dir, _page_stem(stem, page, len(pages)), formats)
     return paths
 
 
 def _histories(ds: xr.Dataset, names: list[str], stem: str, cases: Cases, out_dir: Path,
                formats: Sequence[str]) -> list[Path]:
-    """Histories without an extra dimension: one panel per history, one line per case."""
-    ok = [c for c in cases if c[2]]
+    """Histories without an extra dimension: one panel per history (its name as the panel's
+    title, its units on the axis: long names as axis labels collide), one line per case."""
+    ok = [c for c in cases if c.ok]
     paths: list[Path] = []
     pages = _pages(ok)
     for page, chunk in enumerate(pages):
         fig = Figure(figsize=(9, 1.5 + 2.5 * len(names)), layout="constrained")
         axes = fig.subplots(len(names), 1, sharex=True, squeeze=False)[:, 0]
-        colors = _colors(len(chunk))
         for ax, name in zip(axes, names, strict=True):
             var = ds[name]
             scale, units = _display_units(var.attrs.get("units", ""), var.values)
-            for (label, sel, _ok), color in zip(chunk, colors, strict=True):
-                x, xlabel = _time_axis(ds, sel)
-                ax.plot(x, var.isel(sel).values * scale, color=color, label=label)
-            ax.set_ylabel(_axis_label({**var.attrs, "units": units}, name), wrap=True)
+            for i, case in enumerate(chunk):
+                x, xlabel = _time_axis(ds, case.sel)
+                _line(ax, x, var.isel(case.sel).values * scale, case.style, i, len(chunk),
+                      label=case.label)
+            ax.set_title(var.attrs.get("long_name", name), fontsize="medium")
+            ax.set_ylabel(_units_label(units))
             _finish_axis(ax, ds)
+        fig.align_ylabels(axes)
         axes[-1].set_xlabel(xlabel)
         _legend(fig, axes[0])
         long_names = [ds[n].attrs.get("long_name", n) for n in names]
         fig.suptitle(f"{long_names[0] if len(names) == 1 else stem.replace('_', ' ')} "
-                     f"{_over(ds)}")
+                     f"{_over(ds)}", wrap=True)
         paths += _save(fig, out_dir, _page_stem(stem, page, len(pages)), formats)
     return paths
 
 
 def _results(ds: xr.Dataset, names: list[str], cases: Cases, out_dir: Path,
              formats: Sequence[str]) -> list[Path]:
-    """Scalar results against the first case dimension, one line per value of the others."""
+    """Scalar results, one panel each: against the first numeric swept parameter (one line per
+    value of the others), or, when the cases are categories (a case list, string parameters),
+    as grouped bars: one group per category of the first dimension, one bar per value of the
+    others (for a case list, one bar per case in its colour)."""
     dims = _case_dims(ds)
-    first, others = dims[0], dims[1:]
+    first = _response_dim(ds) or dims[0]
+    others = tuple(d for d in dims if d != first)
+    numeric = first != "case" and np.issubdtype(ds[first].dtype, np.number)
     if first == "case":
-        x = np.arange(ds.sizes["case"])
-        ticks = [c[0] for c in cases]
+        ticks = [c.label for c in cases]
     else:
-        values = ds[first].values
-        numeric = np.issubdtype(values.dtype, np.number)
-        x = values if numeric else np.arange(values.size)
-        ticks = None if numeric else [_format(v) for v in values]
+        ticks = [_format(v) for v in ds[first].values]
     combos = list(itertools.product(*(range(ds.sizes[d]) for d in others)))
-    colors = _colors(len(combos))
-    fig = Figure(figsize=(8, 1.5 + 2.6 * len(names)), layout="constrained")
+    styles = [c.style for c in cases] if first == "case" else _styles(len(combos))
+    width = 8.0 if numeric else _bar_width(len(ticks) * len(combos))
+    fig = Figure(figsize=(width, 1.5 + 2.6 * len(names)), layout="constrained")
     axes = fig.subplots(len(names), 1, sharex=True, squeeze=False)[:, 0]
+    x = ds[first].values if numeric else np.arange(len(ticks))
     for ax, name in zip(axes, names, strict=True):
         var = ds[name].where(ds["status"] == STATUS_OK)
-        for combo, color in zip(combos, colors, strict=True):
+        for j, combo in enumerate(combos):
             sel = dict(zip(others, combo, strict=True))
             y = var.isel(sel).transpose(first).values
             label = ", ".join(f"{d}={_format(ds[d].values[i])}" for d, i in sel.items())
-            ax.plot(x, y, marker="o", color=color, label=label or None)
-        ax.set_ylabel(_axis_label(dict(ds[name].attrs), name), wrap=True)
-        ax.grid(True, alpha=0.3)
-    if ticks is not None:
-        axes[-1].set_xticks(x, ticks, rotation=30 if first == "case" else 0, ha="right"
-                            if first == "case" else "center")
+            if numeric:
+                _line(ax, x, y, styles[j], j, len(combos), label=label or None)
+                continue
+            bar = 0.8 / len(combos)
+            colors = [st["color"] for st in styles] if first == "case" else styles[j]["color"]
+            ax.bar(x - 0.4 + (j + 0.5) * bar, np.nan_to_num(y), bar, color=colors,
+                   edgecolor="black", linewidth=0.5, label=label or None)
+        units = ds[name].attrs.get("units", "")
+        ax.set_title(ds[name].attrs.get("long_name", name), fontsize="medium")
+        ax.set_ylabel(_units_label(units))
+        ax.grid(True, axis="both" if numeric else "y", alpha=0.3)
+    fig.align_ylabels(axes)
+    if not numeric:
+        axes[-1].set_xticks(x, ticks, rotation=30 if first == "case" else 0,
+                            ha="right" if first == "case" else "center")
     axes[-1].set_xlabel("case" if first == "case" else _axis_label(dict(ds[first].attrs),
                                                                    first))
     if others:
         _legend(fig, axes[0])
-    fig.suptitle("Results" + ("" if first == "case" else f" against {first}"))
+    fig.suptitle("Results" + ("" if first == "case" else f" against {first}"), wrap=True)
     stem = "results" if first == "case" else f"results_vs_{first}"
     return _save(fig, out_dir, stem, formats)
 
@@ -470,7 +596,8 @@ def archive_model(ds: xr.Dataset, path: str | os.PathLike[str] = "archive") -> M
     pipelines.archive.ArchiveError
         If the file is not a sweep archive or its model cannot be loaded.
     """
-    from pipelines.sweep import StudyError, resolve_model
+    from studies.parameters import ParameterError
+    from studies.registry import resolve_model
 
     if "status" not in ds or "model" not in ds.attrs:
         raise ArchiveError(f"{path} is not a sweep archive (no 'status' variable or 'model' "
@@ -478,7 +605,7 @@ def archive_model(ds: xr.Dataset, path: str | os.PathLike[str] = "archive") -> M
                            "bifilar run")
     try:
         return resolve_model(str(ds.attrs["model"]))
-    except StudyError as exc:
+    except ParameterError as exc:
         raise ArchiveError(f"{path}: cannot load its model to plot it: {exc}") from exc
 
 
@@ -534,7 +661,7 @@ def plot_archive(
     ds = open_archive(archive_path)
     spec = archive_model(ds, archive_path)
     cases = _cases(ds)
-    if not any(ok for *_, ok in cases):
+    if not any(case.ok for case in cases):
         counts = status_counts(ds)
         raise ArchiveError(
             f"no case of {archive_path} finished ok ({counts['failed']} failed, "
@@ -544,8 +671,9 @@ def plot_archive(
     out.mkdir(parents=True, exist_ok=True)
     paths: list[Path] = []
     if spec.periodic:
-        lines = _response_dim(ds) is not None or (
-            _case_dims(ds) != ("case",) and len(cases) > MAX_BAR_CASES)
+        # response curves need a numeric abscissa; categories (a case list, a string
+        # parameter such as ``hole``) are grouped bars
+        lines = _response_dim(ds) is not None
         for pair in comparison_pairs(ds):
             paths += _comparison(ds, spec, pair, out, formats)
         for name, decl in spec.outputs.items():
