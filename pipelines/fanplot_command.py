@@ -17,13 +17,14 @@ import click
 import numpy as np
 import xarray as xr
 
-from pipelines.archive import CONVENTIONS
 from pipelines.options import OutPath
-from pipelines.study_commands import _fail, _finish, _writable, _write
+from pipelines.single import check_writable, fail, finish_figure, run_single
 from studies.bifilar import HARDWARE
+from studies.fanplot import MAX_SPEED, SPEC
 from studies.uh60a import UH60A, bowen_davies_fanplot
 
-MAX_SPEED = 60.0  # rad/s: well past any rotor's overspeed; the data set is for 27 rad/s
+# How the case's worker finds the model (it is not in the sweep registry).
+MODEL_REF = "studies.fanplot:SPEC"
 
 
 def fanplot_figure(ds: xr.Dataset, stem: Path, tuning_order: float) -> list[Path]:
@@ -61,7 +62,7 @@ def fanplot_figure(ds: xr.Dataset, stem: Path, tuning_order: float) -> list[Path
     ax.set_xlabel("rotor speed Ω (rad/s)")
     ax.set_ylabel("natural frequency (Hz)")
     ax.set_title("UH-60A articulated blade, rotating frame", fontsize=10)
-    return _finish(fig, ax, stem)
+    return finish_figure(fig, ax, stem)
 
 
 class _SpeedList(click.ParamType):
@@ -96,18 +97,12 @@ def fanplot(speeds: tuple[float, ...], more_speeds: tuple[float, ...], elements:
     multibody model: coincident flap/lag hinges at 0.381 m, lag hinge free (no damper), rigid
     pitch link, Yeo section properties with the Davis cuff and the structural twist.
     """
-    from studies.blade import fanplot as compute
-
     if more_speeds and not speeds:
-        _fail(f"unexpected argument {more_speeds[0]:g}: rotor speeds go after --speeds")
-    _writable(out, None)
+        fail(f"unexpected argument {more_speeds[0]:g}: rotor speeds go after --speeds")
+    check_writable(out)
     given = sorted(set(speeds + more_speeds))
-    try:
-        ds = compute(given or None, n_elements=elements)
-    except (ValueError, RuntimeError) as exc:
-        _fail(str(exc))
-    ds.attrs.update(Conventions=CONVENTIONS, tuning_order=tuning_order)
-    _write(ds, out)
+    ds = run_single(SPEC, MODEL_REF, {"speeds": " ".join(map(repr, given)),
+                                      "elements": elements}, out)
     click.echo(str(out))
     for path in fanplot_figure(ds, out.with_suffix(""), tuning_order):
         click.echo(str(path))

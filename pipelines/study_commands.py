@@ -8,22 +8,31 @@ one with one line naming the parameter and its valid range (exit status 2).
 
 from __future__ import annotations
 
-import os
 from collections.abc import Callable, Collection, Mapping
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
-from typing import Any, NoReturn
+from typing import Any
 
 import click
 import numpy as np
 import xarray as xr
 
-from pipelines.archive import CONVENTIONS
-from pipelines.checks import InputError, check_output_dir, check_output_file
+from pipelines.archive import CONVENTIONS, open_archive, write_case
+from pipelines.checks import InputError
+from pipelines.cluster import SweepError
 from pipelines.options import OutPath
+from pipelines.single import (
+    check_writable,
+    command_line,
+    fail,
+    finish_figure,
+    run_single,
+    toml_value,
+)
+from pipelines.studyfile import StudyError
+from pipelines.sweep import run_sweep
 from studies import bifilar as pendulum_study
 from studies import collar as collar_study
-from studies.parameters import Param, ParameterError
+from studies.parameters import ModelSpec, Param, ParameterError
 
 _CLICK_TYPES: dict[type, Any] = {float: float, int: int, str: str, bool: bool}
 
@@ -75,79 +84,34 @@ def param_options(parameters: Mapping[str, Param], *, no_default: Collection[str
     return decorate
 
 
-def _fail(msg: str) -> NoReturn:
-    click.echo(f"error: {' '.join(str(msg).split())}", err=True)
-    raise SystemExit(2)
+def _run_and_write(spec: ModelSpec, given: dict[str, Any], out: Path) -> xr.Dataset:
+    """Validate, run and write one case (:func:`pipelines.single.run_single`)."""
+    return run_single(spec, spec.name, given, out)
 
 
-def _writable(out: Path | None, figures: Path | None) -> None:
-    """Refuse an unwritable ``--out`` file or ``--figures`` directory before any run."""
+def _sweep_figure_cases(out_dir: Path, name: str, model: str, fixed: dict[str, Any],
+                        sweep: dict[str, list[Any]], workers: int) -> xr.Dataset:
+    """Run a figure's cases as a sweep into ``out_dir`` (study file, ``cases/``,
+    ``archive.nc``; an interrupted figure run resumes) and return the archive."""
+    lines = [f'model = "{model}"', f'title = "{name}"', "[fixed]"]
+    lines += [f"{k} = {toml_value(v)}" for k, v in fixed.items()]
+    lines += ["[sweep]"] + [f"{k} = [{', '.join(map(toml_value, v))}]" for k, v in sweep.items()]
+    study = out_dir / f"{name}_study.toml"
+    study.write_text("\n".join(lines) + "\n", encoding="utf-8")
     try:
-        if out is not None:
-            check_output_file(out, "--out")
-        if figures is not None:
-            check_output_dir(figures, "--figures")
-    except InputError as exc:
-        _fail(str(exc))
-
-
-def _write(ds: xr.Dataset, out: Path) -> None:
-    out.parent.mkdir(parents=True, exist_ok=True)
-    enc = {v: {"zlib": True, "complevel": 4} for v in ds.data_vars if ds[v].dtype.kind == "f"
-           and ds[v].ndim > 0}
-    attrs = {k: (int(v) if isinstance(v, bool) else v) for k, v in ds.attrs.items()}
-    ds = ds.assign_attrs(attrs)
-    tmp = out.with_name(out.name + ".tmp")
-    ds.to_netcdf(tmp, encoding=enc)
-    os.replace(tmp, out)
-
-
-def _finish(fig, ax, stem: Path) -> list[Path]:
-    """Grid, legend, layout; save as PNG and PDF; close."""
-    import matplotlib.pyplot as plt
-
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    paths = []
-    for ext in ("png", "pdf"):
-        paths.append(stem.with_suffix(f".{ext}"))
-        fig.savefig(paths[-1], dpi=150)
-    plt.close(fig)
-    return paths
-
-
-def _run_and_write(spec, given: dict[str, Any], out: Path) -> xr.Dataset:
-    """Validate, run, write; one-line errors for bad input or a failed simulation."""
-    try:
-        ds = spec.run(spec.complete(given))
-    except ParameterError as exc:
-        _fail(str(exc))
-    _write(ds, out)
-    if not ds.attrs["converged"]:
-        _fail(f"simulation failed: {ds.attrs['message']}")
-    return ds
-
-
-def _pool_map(fn, items: list, workers: int) -> list:
-    if workers <= 1:
-        return [fn(i) for i in items]
-    with ProcessPoolExecutor(max_workers=workers) as ex:
-        return list(ex.map(fn, items))
+        archive = run_sweep(study, out_dir, workers=workers, command=command_line())
+    except (StudyError, SweepError, InputError) as exc:
+        fail(str(exc))
+    return open_archive(archive)
 
 
 # ------------------------------------------------------------------------------- collar
-def _collar_case(params: dict[str, Any]) -> dict[str, float]:
-    from studies.collar import run
-
-    ds = run(params)
-    return {"period": float(ds.period), "period_analytic": float(ds.period_analytic),
-            "energy_error": float(np.abs(ds.energy_error).max()),
-            "violation": float(ds.constraint_violation.max())}
-
-
 def collar_figures(out_dir: Path, steps_per_period: int = 1000, workers: int = 2) -> list[Path]:
-    """Figs. 11 and 12: period against θ0 for both curves and both cases; PNG, PDF, netCDF."""
+    """Figs. 11 and 12: period against θ0 for both curves and both cases; PNG, PDF, netCDF.
+
+    The 32 cases run as a sweep into ``out_dir`` (``collar_study.toml``, ``cases/``,
+    ``archive.nc``); ``collar_periods.nc`` is the table of the figures.
+    """
     import matplotlib
 
     matplotlib.use("Agg")
@@ -158,12 +122,12 @@ def collar_figures(out_dir: Path, steps_per_period: int = 1000, workers: int = 2
     out_dir.mkdir(parents=True, exist_ok=True)
     thetas = np.arange(10.0, 81.0, 10.0)
     curves, inertias = ("circle", "cycloid"), (0.0, 0.25)
-    jobs = [dict(curve=c, theta0=float(t), inertia=ip, steps_per_period=steps_per_period)
-            for ip in inertias for c in curves for t in thetas]
-    res = _pool_map(_collar_case, jobs, workers)
-    shape = (len(inertias), len(curves), len(thetas))
-    per = np.array([r["period"] for r in res]).reshape(shape)
-    ana = np.array([r["period_analytic"] for r in res]).reshape(shape)
+    res = _sweep_figure_cases(out_dir, "collar", "collar",
+                              {"steps_per_period": steps_per_period},
+                              {"inertia": list(inertias), "curve": list(curves),
+                               "theta0": [float(t) for t in thetas]}, workers)
+    per = res["period"].transpose("inertia", "curve", "theta0").values
+    ana = res["period_analytic"].transpose("inertia", "curve", "theta0").values
     table = xr.Dataset(
         {"period": (("case", "curve", "theta0"), per, {"units": "s",
                     "long_name": "period measured from the simulated motion"}),
@@ -171,28 +135,28 @@ def collar_figures(out_dir: Path, steps_per_period: int = 1000, workers: int = 2
                              "long_name": "analytic period (Eqs. 8, 26, 27 with errata)"}),
          "relative_error": (("case", "curve", "theta0"), per / ana - 1, {"units": "1",
                             "long_name": "relative period error"})},
-        coords={"case": ("case", [1, 2], {"long_name": "1: Ip = 0, 2: Ip = 0.25 kg m2"}),
-                "curve": list(curves),
+        coords={"case": ("case", [1, 2], {"units": "1",
+                                          "long_name": "1: Ip = 0, 2: Ip = 0.25 kg m2"}),
+                "curve": ("curve", list(curves), {"units": "1", "long_name": "curve"}),
                 "theta0": ("theta0", thetas, {"units": "degree", "long_name": "release angle"})},
         attrs={"title": "Collar on a circle and a cycloid (paper Figs. 11-12)",
                "Conventions": CONVENTIONS})
-    paths = [out_dir / "collar_periods.nc"]
-    _write(table, paths[0])
+    paths = [write_case(table, out_dir / "collar_periods.nc")]
     fine = np.linspace(1.0, 89.0, 200)
     for ci, (case, ip) in enumerate(zip((1, 2), inertias, strict=True)):
         fig, ax = plt.subplots(figsize=(6.4, 4.4))
         for k, (curve, style, mark) in enumerate(zip(curves, ("-", "--"), ("+", "o"),
                                                      strict=True)):
             th = fine if curve == "circle" else fine[fine < 89.5]
-            p0 = SPEC.complete({"curve": curve, "inertia": ip})
-            line = [analytic_period({**p0, "theta0": float(t)}) for t in th]
+            p0 = SPEC.validate({"curve": curve, "inertia": ip})
+            line = [analytic_period(p0.replace(theta0=float(t))) for t in th]
             ax.plot(th, line, style, color="k", lw=1.2, label=f"{curve}: analytic")
             ax.plot(thetas, per[ci, k], mark, color="C3" if k else "C0", ms=8, mfc="none",
                     label=f"{curve}: multibody")
         ax.set_xlabel("release angle θ0 (degree)")
         ax.set_ylabel("period T (s)")
         ax.set_title(f"Collar, case {case} (Ip = {ip:g} kg·m²)")
-        paths += _finish(fig, ax, out_dir / f"collar_case{case}")
+        paths += finish_figure(fig, ax, out_dir / f"collar_case{case}")
     return paths
 
 
@@ -206,7 +170,7 @@ def collar_figures(out_dir: Path, steps_per_period: int = 1000, workers: int = 2
               help="reproduce Figs. 11 and 12 into this directory instead")
 def collar(out: Path | None, figures: Path | None, **params: Any) -> None:
     """The paper's validation: a collar sliding on a circle or a cycloid (Figs. 10-12)."""
-    _writable(out, figures)
+    check_writable(out, figures)
     if figures is not None:
         for p in collar_figures(figures, params["steps_per_period"]):
             click.echo(str(p))
@@ -214,7 +178,7 @@ def collar(out: Path | None, figures: Path | None, **params: Any) -> None:
     missing = [n for n, v in (("--curve", params["curve"]), ("--theta0", params["theta0"]),
                               ("--out", out)) if v is None]
     if missing:
-        _fail(f"missing {', '.join(missing)} (or give --figures DIR)")
+        fail(f"missing {', '.join(missing)} (or give --figures DIR)")
     assert out is not None
     ds = _run_and_write(collar_study.SPEC, params, out)
     click.echo(f"measured period  {float(ds.period):.9f} s")
@@ -223,15 +187,13 @@ def collar(out: Path | None, figures: Path | None, **params: Any) -> None:
 
 
 # ----------------------------------------------------------------------------- pendulum
-def _pendulum_case(params: dict[str, Any]) -> float:
-    from studies.bifilar import run
-
-    return float(run(params).frequency_order)
-
-
 def pendulum_figures(out_dir: Path, base: dict[str, Any], workers: int = 2) -> list[Path]:
-    """Frequency order against amplitude (0-40°) for circle, cycloid and epicycloid holes
-    tuned to the same small-amplitude order."""
+    """Frequency order against amplitude (1-40°) for circle, cycloid and epicycloid holes
+    tuned to the same small-amplitude order.
+
+    The 27 cases run as a sweep into ``out_dir`` (``pendulum_study.toml``, ``cases/``,
+    ``archive.nc``); ``pendulum_order.nc`` is the table of the figure.
+    """
     import matplotlib
 
     matplotlib.use("Agg")
@@ -243,20 +205,21 @@ def pendulum_figures(out_dir: Path, base: dict[str, Any], workers: int = 2) -> l
     out_dir.mkdir(parents=True, exist_ok=True)
     amps = np.array([1.0, 5.0, 10.0, 15.0, 20.0, 25.0, 30.0, 35.0, 40.0])
     shapes = ("circle", "cycloid", "epicycloid")
-    jobs = [{**base, "hole": s, "amplitude": float(a), "hole_diameter": 0.0}
-            for s in shapes for a in amps]
-    orders = np.array(_pool_map(_pendulum_case, jobs, workers)).reshape(len(shapes), len(amps))
-    n_lin = holes_for(SPEC.complete({**base, "hole": "circle", "hole_diameter": 0.0}))
+    fixed = {k: v for k, v in base.items() if k not in ("hole", "amplitude")}
+    res = _sweep_figure_cases(out_dir, "pendulum", "pendulum", {**fixed, "hole_diameter": 0.0},
+                              {"hole": list(shapes), "amplitude": [float(a) for a in amps]},
+                              workers)
+    orders = res["frequency_order"].transpose("hole", "amplitude").values
+    n_lin = holes_for(SPEC.validate({**base, "hole": "circle", "hole_diameter": 0.0}))
     table = xr.Dataset(
         {"frequency_order": (("hole", "amplitude"), orders, {"units": "1",
                              "long_name": "ω/Ω measured from the free response"})},
-        coords={"hole": list(shapes),
+        coords={"hole": ("hole", list(shapes), {"units": "1", "long_name": "hole shape"}),
                 "amplitude": ("amplitude", amps, {"units": "degree",
                               "long_name": "release angle"})},
         attrs={"title": "Bifilar tuning order against amplitude", "Conventions": CONVENTIONS,
                "frequency_order_linear": n_lin.order_linear})
-    paths = [out_dir / "pendulum_order.nc"]
-    _write(table, paths[0])
+    paths = [write_case(table, out_dir / "pendulum_order.nc")]
     fig, ax = plt.subplots(figsize=(6.4, 4.4))
     fine = np.linspace(0.0, 40.0, 200)
     ax.plot(fine, [n_lin.order_linear * amplitude_frequency_ratio(np.radians(a))
@@ -267,7 +230,7 @@ def pendulum_figures(out_dir: Path, base: dict[str, Any], workers: int = 2) -> l
     ax.set_xlabel("amplitude (degree)")
     ax.set_ylabel("tuning order ω/Ω")
     ax.set_title(f"Bifilar tuned to {n_lin.order_linear:.3g}P at Ω = {base['hub_speed']:g} rad/s")
-    return paths + _finish(fig, ax, out_dir / "pendulum_order")
+    return paths + finish_figure(fig, ax, out_dir / "pendulum_order")
 
 
 @click.command()
@@ -281,12 +244,12 @@ def pendulum_figures(out_dir: Path, base: dict[str, Any], workers: int = 2) -> l
 def pendulum(out: Path | None, figures: Path | None, **params: Any) -> None:
     """One bifilar pendulum on a hub spinning at constant speed (Figs. 1, 5-7, Eq. 7)."""
     spec = pendulum_study.SPEC
-    _writable(out, figures)
+    check_writable(out, figures)
     hole_diameter, amplitude = params["hole_diameter"], params.pop("amplitude")
     if hole_diameter is not None and params["tuning_order"] is not None:
-        _fail("give either --hole-diameter or --tuning-order, not both")
+        fail("give either --hole-diameter or --tuning-order, not both")
     if hole_diameter is not None and not hole_diameter > 0:
-        _fail(f"hole_diameter = {hole_diameter:g} m: must be > 0")
+        fail(f"hole_diameter = {hole_diameter:g} m: must be > 0")
     given = {name: value for name, value in params.items() if value is not None}
     try:
         if figures is not None:
@@ -295,10 +258,10 @@ def pendulum(out: Path | None, figures: Path | None, **params: Any) -> None:
                 click.echo(str(p))
             return
     except ParameterError as exc:
-        _fail(str(exc))
+        fail(str(exc))
     missing = [n for n, v in (("--amplitude", amplitude), ("--out", out)) if v is None]
     if missing:
-        _fail(f"missing {', '.join(missing)} (or give --figures DIR)")
+        fail(f"missing {', '.join(missing)} (or give --figures DIR)")
     assert out is not None
     ds = _run_and_write(spec, {**given, "amplitude": amplitude}, out)
     click.echo(f"tuning order measured   {float(ds.frequency_order):.6f}")

@@ -131,11 +131,12 @@ def _urgent(listener: Any, line: str) -> None:
 
 def run_case(model_name: str, params: Mapping[str, Any], case_file: str,
              progress_topic: str | None = None,
-             progress: Callable[[str], None] | None = None) -> dict[str, Any]:
+             progress: Callable[[str], None] | None = None, *, case_id: str | None = None,
+             whole: bool = False) -> dict[str, Any]:
     """Run one case and write its case file atomically; the dask task of a sweep.
 
     Any exception of the model (or a result with ``attrs["status"] == "failed"`` or
-    ``attrs["converged"] == 0``, a simulation that stopped early) is caught and recorded as a
+    ``run_converged == 0``, a simulation that stopped early) is caught and recorded as a
     failed case with its message: one bad case must not stop an overnight sweep. What the case
     file keeps is what the model's outputs declare (:func:`pipelines.archive.case_summary`).
     Only a small summary travels back to the client; the data stay in the file.
@@ -152,6 +153,11 @@ def run_case(model_name: str, params: Mapping[str, Any], case_file: str,
         Dask event topic to which the model's progress lines are sent (on a dask worker).
     progress
         Receives the progress lines instead, outside dask (the single-model commands).
+    case_id
+        The case's id (default: the case file's stem, ``<case_id>.nc`` in a sweep).
+    whole
+        Write the model's whole result, every variable and its global attributes, instead of
+        what the sweep archive keeps of it (the single-model commands' output files).
 
     Returns
     -------
@@ -160,16 +166,17 @@ def run_case(model_name: str, params: Mapping[str, Any], case_file: str,
         model's note, usually ``""``) and ``wall_time`` (s).
     """
     start = time.perf_counter()
-    case_id = Path(case_file).stem
+    case_id = case_id or Path(case_file).stem
     status, message, tb = STATUS_OK, "", ""
     summary = xr.Dataset()
+    model_attrs: dict[str, Any] = {}
     version = ""
     listener = _progress_listener(progress_topic, case_id) if progress_topic else None
-    if listener is None and progress is not None:
+    if listener is not None:
+        listener(f"started on {_worker_name()}")
+    elif progress is not None:
         listener = progress
     try:
-        if listener is not None:
-            listener(f"started on {_worker_name()}")
         with contextlib.ExitStack() as stack:
             if listener is not None:
                 stack.enter_context(reporting(listener))
@@ -181,7 +188,7 @@ def run_case(model_name: str, params: Mapping[str, Any], case_file: str,
         reported = str(result.attrs.get("status", "ok")).lower()
         if reported in ("failed", str(STATUS_FAILED)):
             raise ModelFailure(str(result.attrs.get("message", "model reported failure")))
-        if not int(result.attrs.get("converged", 1)):
+        if "run_converged" in result and not int(result["run_converged"]):
             raise ModelFailure("simulation did not converge: "
                                + str(result.attrs.get("message", "no message")))
         summary = case_summary(result, spec)
@@ -193,11 +200,17 @@ def run_case(model_name: str, params: Mapping[str, Any], case_file: str,
                 "or no motion to measure)")
         # an ok case may carry the model's note (e.g. that shooting fell back to marching)
         message = str(result.attrs.get("message", ""))
+        if whole:
+            summary = result
+            # netCDF has no booleans: the model's flags (converged, …) are kept as 0/1
+            model_attrs = {k: int(v) if isinstance(v, bool) else v
+                           for k, v in result.attrs.items() if v is not None}
     except Exception as exc:
         status, message, tb = STATUS_FAILED, one_line(exc), traceback.format_exc()
-        summary = xr.Dataset()
+        summary, model_attrs = xr.Dataset(), {}
     wall_time = time.perf_counter() - start
     summary.attrs = {
+        **model_attrs,
         "Conventions": CONVENTIONS, "case_id": case_id, "model": model_name,
         "model_version": version,
         "parameters": json.dumps(dict(params), sort_keys=True),

@@ -38,6 +38,7 @@ from pipelines import sweep as sweep_module
 from pipelines.archive import open_archive, write_case
 from pipelines.checks import InputError, check_scheduler_address
 from pipelines.cluster import dashboard_works
+from pipelines.single import fail
 from pipelines.studyfile import StudyError, load_study, make_case_id, model_version
 from pipelines.sweep import consolidate_study
 from pipelines.worker import run_case
@@ -334,7 +335,7 @@ def test_random_command_lines_are_refused_in_one_line_or_run_as_given(tmp_path, 
         try:
             params = spec_.complete(given_)
         except ParameterError as exc:
-            study_commands._fail(str(exc))
+            fail(str(exc))
         runs.append(params)
         return xr.Dataset({k: ((), 1.0) for k in (
             "period", "period_analytic", "period_error", "frequency_order",
