@@ -37,10 +37,12 @@ from pipelines.checks import (
     check_workers,
     max_workers,
 )
+from pipelines.cluster import SweepError, check_cluster
 from pipelines.fanplot_command import fanplot
 from pipelines.options import OutPath
 from pipelines.study_commands import collar, pendulum
-from pipelines.sweep import CASES_DIR, StudyError, SweepError, run_sweep
+from pipelines.studyfile import StudyError
+from pipelines.sweep import CASES_DIR, run_sweep
 from studies.parameters import ParameterError
 
 # The built-in study of each model `bifilar run --model` offers.
@@ -119,11 +121,17 @@ def _exit_if_not_ok(line: str | None) -> None:
         raise click.exceptions.Exit(EXIT_FAILED_CASES)
 
 
-def _check_cluster(workers: int | None, scheduler: str | None) -> None:
+def _check_cluster(workers: int | None, scheduler: str | None,
+                   cluster: str | None = None) -> None:
     if workers is not None and scheduler is not None:
         _fail("--workers and --scheduler are mutually exclusive: --workers starts a local "
               "cluster, --scheduler uses a running one")
+    if cluster is not None and (workers is not None or scheduler is not None):
+        _fail("--cluster is exclusive with --workers and --scheduler: it submits its own "
+              "worker jobs")
     with _user_errors():
+        if cluster is not None:
+            check_cluster(cluster)
         if workers is not None:
             check_workers(workers)
         if scheduler is not None:
@@ -135,7 +143,10 @@ def _command_line(ctx: click.Context, *args: str) -> str:
     return f"{ctx.command_path} {shlex.join(args)}"
 
 
-def _cluster_args(workers: int | None, scheduler: str | None) -> list[str]:
+def _cluster_args(workers: int | None, scheduler: str | None,
+                  cluster: str | None = None) -> list[str]:
+    if cluster is not None:
+        return ["--cluster", cluster]
     if workers is not None:
         return ["--workers", str(workers)]
     if scheduler is not None:
@@ -152,11 +163,17 @@ scheduler_option = click.option(
     "--scheduler", default=None, metavar="ADDRESS",
     help="Address of a running dask scheduler, e.g. tcp://host:8786 (exclusive with --workers).",
 )
+cluster_option = click.option(
+    "--cluster", type=click.Choice(["slurm", "pbs"]), default=None,
+    help="Run the workers as jobs of a SLURM or PBS batch system, with the resources of the "
+         "study file's [cluster] table or dask's jobqueue configuration (needs dask-jobqueue: "
+         "pip install 'bifilar[cluster]'; exclusive with --workers and --scheduler).",
+)
 worker_timeout_option = click.option(
     "--worker-timeout", type=click.FloatRange(min=0, min_open=True), default=None,
     metavar="SECONDS",
-    help="How long to wait for the first worker of a --scheduler that has none, saying so "
-         "on stderr; then exit 2 without running anything (default 600).",
+    help="How long to wait for the first worker of a --scheduler or --cluster that has none, "
+         "saying so on stderr; then exit 2 without running anything (default 600).",
 )
 
 
@@ -198,13 +215,14 @@ def main() -> None:
               help="Output directory: cases/, archive.nc and the lock file sweep.lock.")
 @workers_option
 @scheduler_option
+@cluster_option
 @worker_timeout_option
 @click.option("--retry-failed", is_flag=True, help="Recompute cases recorded as failed.")
 @click.option("--quiet", is_flag=True, help="No progress lines.")
 @click.pass_context
 def sweep(ctx: click.Context, study: Path, out_dir: Path, workers: int | None,
-          scheduler: str | None, worker_timeout: float | None, retry_failed: bool,
-          quiet: bool) -> None:
+          scheduler: str | None, cluster: str | None, worker_timeout: float | None,
+          retry_failed: bool, quiet: bool) -> None:
     """Run every case of STUDY (a TOML study file) and write DIR/archive.nc.
 
     The study's model is a registry name (model = "hub") or a plug-in given as
@@ -212,14 +230,14 @@ def sweep(ctx: click.Context, study: Path, out_dir: Path, workers: int | None,
     interrupted sweep resumes when run again. Prints the archive path. Exit status 0 if every
     case is ok, 1 if some failed or did not run, 2 for bad input.
     """
-    _check_cluster(workers, scheduler)
+    _check_cluster(workers, scheduler, cluster)
     command = _command_line(ctx, str(study), "--out", str(out_dir),
-                            *_cluster_args(workers, scheduler),
+                            *_cluster_args(workers, scheduler, cluster),
                             *(["--retry-failed"] if retry_failed else []))
     with _user_errors(), _terminate_as_interrupt():
         archive = run_sweep(study, out_dir, workers=workers, scheduler=scheduler,
                             progress=not quiet, retry_failed=retry_failed, command=command,
-                            worker_timeout=worker_timeout)
+                            worker_timeout=worker_timeout, cluster=cluster)
         _, not_ok = _not_ok(archive)
     click.echo(str(archive))
     _exit_if_not_ok(not_ok)
@@ -258,10 +276,11 @@ def plot(archive: Path, out_dir: Path, formats: tuple[str, ...]) -> None:
                    "with assumed 3P/5P blade shears (under a minute).")
 @workers_option
 @scheduler_option
+@cluster_option
 @worker_timeout_option
 @click.pass_context
 def run(ctx: click.Context, out_dir: Path, model: str, workers: int | None,
-        scheduler: str | None, worker_timeout: float | None) -> None:
+        scheduler: str | None, cluster: str | None, worker_timeout: float | None) -> None:
     """Run the built-in study (the paper's Table 1, cases 0-3, and the linear equivalent of
     case 1) on the rotor (default) or the hub model, and plot it into DIR/plots.
 
@@ -269,16 +288,16 @@ def run(ctx: click.Context, out_dir: Path, model: str, workers: int | None,
     """
     from pipelines.plots import plot_archive
 
-    _check_cluster(workers, scheduler)
+    _check_cluster(workers, scheduler, cluster)
     command = _command_line(ctx, "--out", str(out_dir), "--model", model,
-                            *_cluster_args(workers, scheduler))
+                            *_cluster_args(workers, scheduler, cluster))
     with _user_errors():
         check_output_dir(out_dir)
         check_output_dir(out_dir / "plots", "--out")
     with _user_errors(), _terminate_as_interrupt(), \
             resources.as_file(default_study(model)) as study:
         archive = run_sweep(study, out_dir, workers=workers, scheduler=scheduler,
-                            command=command, worker_timeout=worker_timeout)
+                            command=command, worker_timeout=worker_timeout, cluster=cluster)
         counts, not_ok = _not_ok(archive)
         paths = plot_archive(archive, out_dir / "plots") if counts["ok"] else []
     click.echo(str(archive))

@@ -45,7 +45,7 @@ import math
 import os
 import tomllib
 from collections.abc import Collection, Iterator, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
 
@@ -61,7 +61,10 @@ from studies.registry import available, resolve_model
 
 # Length of the hex case id: 64 bits makes an accidental clash within one study negligible.
 CASE_ID_LENGTH = 16
-TOP_LEVEL_KEYS = ("model", "title", "description", "fixed", "sweep", "cases")
+TOP_LEVEL_KEYS = ("model", "title", "description", "fixed", "sweep", "cases", "cluster")
+# The [cluster] table: job resources of --cluster slurm|pbs (pipelines.cluster).
+CLUSTER_KEYS: dict[str, type] = {"cores": int, "memory": str, "walltime": str, "queue": str,
+                                 "account": str, "jobs": int}
 # Most cases one study may hold. The study is validated, and its archive consolidated, in
 # memory in the driver: 10^5 cases validate in seconds and their archive of a few scalars per
 # case is a few hundred megabytes; a larger study belongs in several files.
@@ -165,6 +168,7 @@ class Study:
     kind: Literal["sweep", "cases"]
     sweep: dict[str, list[Any]]
     cases: tuple[Case, ...]
+    cluster: dict[str, Any] = field(default_factory=dict)
 
     def dims(self) -> dict[str, int]:
         """Archive case dimensions and their sizes."""
@@ -472,5 +476,22 @@ def load_study(path: str | os.PathLike[str]) -> Study:
             raise StudyError(f"{src}: cases {seen[case.case_id]!r} and {case.label!r} have "
                              "identical parameters; remove one")
         seen[case.case_id] = case.label
-    return Study(path, text, model_ref, spec, title, kind, sweep, tuple(cases))
+    return Study(path, text, model_ref, spec, title, kind, sweep, tuple(cases),
+                 _cluster_table(src, doc.get("cluster", {})))
+
+
+def _cluster_table(src: str, table: Any) -> dict[str, Any]:
+    """The validated ``[cluster]`` table: job resources for ``--cluster slurm|pbs``."""
+    table = _table(f"{src}: [cluster]", table)
+    for key, value in table.items():
+        kind = CLUSTER_KEYS.get(key)
+        if kind is None:
+            raise StudyError(f"{src} [cluster]: unknown key {key!r}; allowed: "
+                             f"{', '.join(CLUSTER_KEYS)}")
+        if kind is int and (isinstance(value, bool) or not isinstance(value, int) or value < 1):
+            raise StudyError(f"{src} [cluster]: {key} = {value!r} must be a whole number >= 1")
+        if kind is str and (not isinstance(value, str) or not value.strip()):
+            raise StudyError(f"{src} [cluster]: {key} = {value!r} must be a non-empty string, "
+                             "e.g. memory = \"16GB\", walltime = \"02:00:00\"")
+    return dict(table)
 

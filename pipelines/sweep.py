@@ -44,6 +44,7 @@ from pipelines.cluster import (
     MALLOC_ENVIRON,
     WORKER_TIMEOUT,
     SweepError,
+    check_cluster,
     connect,
     dashboard_works,
     wait_for_workers,
@@ -98,6 +99,7 @@ def run_sweep(
     retry_failed: bool = False,
     command: str | None = None,
     worker_timeout: float | None = None,
+    cluster: str | None = None,
 ) -> Path:
     """Run every case of a study on dask and consolidate the results into one archive.
 
@@ -120,9 +122,13 @@ def run_sweep(
     command
         Command line recorded in the archive's ``history`` and in the lock file (default:
         ``sys.argv``).
+    cluster
+        ``"slurm"`` or ``"pbs"``: run the workers as jobs of that batch system, with the
+        resources of the study file's ``[cluster]`` table (:mod:`pipelines.cluster`; needs
+        dask-jobqueue). Exclusive with ``workers`` and ``scheduler``.
     worker_timeout
-        Seconds to wait for the first worker of a ``scheduler`` that has none (default
-        :data:`WORKER_TIMEOUT`); the wait is announced on stderr.
+        Seconds to wait for the first worker of a ``scheduler`` or ``cluster`` that has none
+        (default :data:`pipelines.cluster.WORKER_TIMEOUT`); the wait is announced on stderr.
 
     Returns
     -------
@@ -141,8 +147,11 @@ def run_sweep(
         1 to :func:`pipelines.checks.max_workers` or the scheduler address is malformed
         (nothing has run).
     """
-    if workers is not None and scheduler is not None:
-        raise StudyError("give either a number of workers or a scheduler address, not both")
+    if sum(x is not None for x in (workers, scheduler, cluster)) > 1:
+        raise InputError("--workers, --scheduler and --cluster are mutually exclusive: give "
+                         "one of them")
+    if cluster is not None:
+        check_cluster(cluster)
     if workers is not None:
         check_workers(workers)
     if scheduler is not None:
@@ -159,12 +168,13 @@ def run_sweep(
     say = printer(progress)
     with sweep_lock(out_dir, command, say):
         return _sweep(study, out_dir, cases_dir, workers, scheduler, retry_failed, command,
-                      worker_timeout, say)
+                      worker_timeout, say, cluster)
 
 
 def _sweep(study: Study, out_dir: Path, cases_dir: Path, workers: int | None,
            scheduler: str | None, retry_failed: bool, command: str,
-           worker_timeout: float | None, say: Callable[[str], None]) -> Path:
+           worker_timeout: float | None, say: Callable[[str], None],
+           cluster: str | None = None) -> Path:
     total = len(study.cases)
     todo = [c for c in study.cases if not _case_done(c.path(cases_dir), retry_failed)]
     finished = total - len(todo)
@@ -179,7 +189,7 @@ def _sweep(study: Study, out_dir: Path, cases_dir: Path, workers: int | None,
                 tmp.unlink(missing_ok=True)
         try:
             _run_cases(study, todo, cases_dir, workers, scheduler, finished, total, say,
-                       worker_timeout)
+                       worker_timeout, cluster=cluster)
         except KeyboardInterrupt:
             interrupted = True
 
@@ -234,12 +244,13 @@ def consolidate_study(study: Study | str | os.PathLike[str], out_dir: str | os.P
 
 def _run_cases(study: Study, todo: list[Case], cases_dir: Path, workers: int | None,
                scheduler: str | None, finished: int, total: int, say: Any,
-               worker_timeout: float | None = None) -> None:
+               worker_timeout: float | None = None, *, cluster: str | None = None) -> None:
     from distributed import as_completed
 
-    with connect(workers, scheduler) as client:
-        if scheduler is not None:
-            wait_for_workers(client, scheduler, worker_timeout or WORKER_TIMEOUT, say)
+    with connect(workers, scheduler, cluster, study.cluster) as client:
+        if scheduler is not None or cluster is not None:
+            wait_for_workers(client, scheduler or client.scheduler.address,
+                             worker_timeout or WORKER_TIMEOUT, say, batch=cluster)
         info = client.scheduler_info()
         dashboard = dashboard_works(client, info)
         say(f"running {len(todo)} case(s) of {study.path} on {len(info.get('workers', {}))} "
