@@ -660,6 +660,10 @@ def plot_archive(
     """
     ds = open_archive(archive_path)
     spec = archive_model(ds, archive_path)
+    # the charts below address an in-plane vector's harmonic amplitudes (archived as
+    # <name>_amplitude) by the vector's name
+    ds = ds.rename({f"{n}_amplitude": n for n, d in spec.outputs.items()
+                    if d.is_vector and f"{n}_amplitude" in ds})
     cases = _cases(ds)
     if not any(case.ok for case in cases):
         counts = status_counts(ds)

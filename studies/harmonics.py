@@ -15,7 +15,9 @@ Coefficients are stored as real floats (cosine and sine), never complex, so they
 unchanged.
 
 Which signals get harmonics, under which names and units, is declared by each model
-(:class:`studies.parameters.Output`): :func:`case_harmonics` follows the declarations.
+(:class:`studies.parameters.Output`): :func:`case_harmonics` follows the declarations. Every
+harmonic output ``<name>``, a single history or an in-plane vector, is archived as
+``<name>_amplitude``, ``<name>_cos`` and ``<name>_sin``.
 """
 
 from __future__ import annotations
@@ -36,6 +38,9 @@ N_MAX = 8
 # Relative tolerance on the time step against 2π/(Ω·N): samples must be uniform and span whole
 # revolutions, otherwise the per-rev bins of the FFT do not hold the per-rev harmonics.
 TIME_STEP_RTOL = 1e-6
+
+# The harmonic variables of an output <name>: <name>_amplitude, <name>_cos and <name>_sin.
+SUFFIXES = ("_amplitude", "_cos", "_sin")
 
 # The scalar results of a per-rev periodic model that give its recording's time base.
 LAYOUT = ("run_hub_speed", "run_samples_per_rev", "run_revolutions")
@@ -156,10 +161,8 @@ def required_variables(outputs: Mapping[str, Output]) -> tuple[str, ...]:
 
 def harmonic_names(outputs: Mapping[str, Output]) -> list[str]:
     """Names of the harmonic variables :func:`case_harmonics` makes from ``outputs``."""
-    names = [f"{v}{s}" for v in vector_quantities(outputs) for s in ("", "_cos", "_sin")]
-    names += [f"{v}{s}" for v in harmonic_signals(outputs)
-              for s in ("_amplitude", "_cos", "_sin")]
-    return names
+    return [f"{v}{s}" for v in (*vector_quantities(outputs), *harmonic_signals(outputs))
+            for s in SUFFIXES]
 
 
 def recording_layout(ds: xr.Dataset) -> tuple[float, int, int, float]:
@@ -222,11 +225,11 @@ def case_harmonics(ds: xr.Dataset, outputs: Mapping[str, Output],
         ``run_samples_per_rev``, ``run_revolutions`` (see :func:`recording_layout`), and the
         time histories that ``outputs`` name for harmonics.
     outputs
-        The model's declarations (:attr:`studies.parameters.ModelSpec.outputs`). An in-plane
-        vector (``components``) gives its amplitude under its own name and the coefficients as
-        ``<name>_cos`` and ``<name>_sin``, dims ``(direction, harmonic)``; a history declared
-        with ``harmonics=True`` gives ``<name>_amplitude``, ``<name>_cos``, ``<name>_sin`` with
-        its other dimensions in front of ``harmonic`` (e.g. ``(bifilar, harmonic)``). Units are
+        The model's declarations (:attr:`studies.parameters.ModelSpec.outputs`). Each gives
+        ``<name>_amplitude``, ``<name>_cos`` and ``<name>_sin``: an in-plane vector
+        (``components``) with dims ``(direction, harmonic)``, a history declared with
+        ``harmonics=True`` with its other dimensions in front of ``harmonic`` (e.g.
+        ``(bifilar, harmonic)``). Units are
         those of the declaration; every variable has ``units`` and ``long_name``.
     n_max
         Highest harmonic.
@@ -277,7 +280,7 @@ def case_harmonics(ds: xr.Dataset, outputs: Mapping[str, Output],
             continue
         h = transform(np.stack([ds[vx].values, ds[vy].values]))
         for suffix, values, what in (
-            ("", h.amplitude, "harmonic amplitude"),
+            ("_amplitude", h.amplitude, "harmonic amplitude"),
             ("_cos", h.cos, "cosine coefficient"),
             ("_sin", h.sin, "sine coefficient"),
         ):

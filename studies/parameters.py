@@ -151,8 +151,8 @@ class Output:
     components
         For an in-plane vector: the names of its declared x and y time histories. The vector is
         derived, never filled by the model: the archive holds its per-rev harmonics as
-        ``<name>`` (amplitude), ``<name>_cos`` and ``<name>_sin`` with dimensions
-        ``(direction, harmonic)``. ``units`` must be the components' units.
+        ``<name>_amplitude``, ``<name>_cos`` and ``<name>_sin`` (as for ``harmonics``) with
+        dimensions ``(direction, harmonic)``. ``units`` must be the components' units.
     figure
         Stem of the report figure in which :func:`pipelines.plots.plot_archive` draws this output
         (``None``: not drawn as a history; it must be archived, ``history=True``, or a vector of

@@ -149,7 +149,8 @@ def test_case_harmonics_and_summary_against_closed_form():
         scale = np.abs(cos).max()
         np.testing.assert_allclose(h[f"{name}_cos"], cos, atol=EXACT * scale)
         np.testing.assert_allclose(h[f"{name}_sin"], sin, atol=EXACT * scale)
-        np.testing.assert_allclose(h[name], np.hypot(cos, sin), atol=EXACT * scale)
+        np.testing.assert_allclose(h[f"{name}_amplitude"], np.hypot(cos, sin),
+                                   atol=EXACT * scale)
     cos, sin = expected_rotating(params)
     np.testing.assert_allclose(h["hub_displacement_rotating_cos"], cos, atol=1e-15)
     np.testing.assert_allclose(h["hub_displacement_rotating_sin"], sin, atol=1e-15)
@@ -297,7 +298,7 @@ def test_cartesian_sweep_archive(sweep_archive):
         assert_cf(ds, study)
         assert ds.attrs["history"].endswith("bifilar sweep study.toml --out out")
         assert ds["status"].dims == ("tuning_order", "fuselage_stiffness_scale")
-        assert ds["hub_force_fixed"].dims == ("tuning_order", "fuselage_stiffness_scale",
+        assert ds["hub_force_fixed_amplitude"].dims == ("tuning_order", "fuselage_stiffness_scale",
                                               "direction", "harmonic")
         assert ds["pin_angle_amplitude"].dims[-2:] == ("bifilar_index", "harmonic")
         assert ds["pin_angle"].dims[-2:] == ("bifilar_index", "time_in_rev")
@@ -322,7 +323,8 @@ def test_cartesian_sweep_archive(sweep_archive):
             assert str(case["case_id"].values) == make_case_id(spec.name, params,
                                                                model_version(spec))
         # the tuned absorber removes most of the 4P force (3P/5P rotating)
-        force4 = ds["hub_force_fixed"].sel(harmonic=4, direction=0, fuselage_stiffness_scale=1)
+        force4 = ds["hub_force_fixed_amplitude"].sel(harmonic=4, direction=0,
+                                                     fuselage_stiffness_scale=1)
         assert force4.sel(tuning_order=3.0) < 0.5 * force4.sel(tuning_order=2.8)
 
 
@@ -336,9 +338,9 @@ def test_failed_case_is_recorded_and_others_finish(cases_archive):
         np.testing.assert_array_equal(ds["status"], [0, 0, 1, 0])
         message = str(ds["message"].values[2])
         assert message.startswith("RuntimeError: unstable")
-        assert ds["hub_force_fixed"].isel(case=2).isnull().all()
+        assert ds["hub_force_fixed_amplitude"].isel(case=2).isnull().all()
         assert ds["run_revolutions"].isel(case=2).isnull()  # integer fill value decoded
-        assert ds["hub_force_fixed"].isel(case=[0, 1, 3]).notnull().all()
+        assert ds["hub_force_fixed_amplitude"].isel(case=[0, 1, 3]).notnull().all()
         # parameters that vary are coordinates on `case`; the others are scalars
         assert ds["bifilar"].dims == ("case",) and ds["tuning_order"].dims == ("case",)
         assert list(ds["bifilar"].values) == ["locked", "free", "free", "free"]
@@ -402,7 +404,8 @@ tuning_order = [2.5, 2.75, 3.0, 3.25, 3.5, 3.75]
     with xr.open_dataset(consolidate_study(study, out)) as partial:
         assert int((partial["status"] == STATUS_OK).sum()) == len(before)
         assert int((partial["status"] == STATUS_NOT_RUN).sum()) == 6 - len(before)
-        assert partial["hub_force_fixed"].where(partial["status"] == STATUS_NOT_RUN).isnull().all()
+        force = partial["hub_force_fixed_amplitude"]
+        assert force.where(partial["status"] == STATUS_NOT_RUN).isnull().all()
 
     path = run_sweep(study, out, scheduler=scheduler)
     after = {p.name: p.stat().st_mtime_ns for p in cases_dir.glob("*.nc")}

@@ -48,7 +48,7 @@ def test_table1_all_cases_ok(table1):
 
 def test_tuned_bifilars_remove_3p_hub_motion(table1):
     ds, _ = table1
-    amp = ds.hub_displacement_rotating.sel(harmonic=3)
+    amp = ds.hub_displacement_rotating_amplitude.sel(harmonic=3)
     locked = float(amp.isel(case=_case(ds, "0")).max())
     tuned = float(amp.isel(case=_case(ds, "1")).max())
     detuned = float(amp.isel(case=_case(ds, "2")).max())
@@ -74,7 +74,7 @@ def test_opposite_pins_out_of_phase_at_3p(table1):
 
 def test_fuselage_stiffness_changes_hub_forces(table1):
     ds, _ = table1
-    f = ds.hub_force_fixed.sel(harmonic=4)
+    f = ds.hub_force_fixed_amplitude.sel(harmonic=4)
     nominal = float(f.isel(case=_case(ds, "1")).max())
     soft = float(f.isel(case=_case(ds, "3")).max())
     assert abs(soft / nominal - 1) >= 0.1  # "tens of percent"
@@ -95,8 +95,8 @@ def test_archive_is_cf_and_plots_exist(table1):
             continue
         assert "long_name" in var.attrs, name
     assert ds.status.attrs["flag_meanings"] == "ok failed not_run"
-    assert ds.hub_displacement_rotating.attrs["units"] == "m"
-    assert ds.hub_force_fixed.attrs["units"] == "N"
+    assert ds.hub_displacement_rotating_amplitude.attrs["units"] == "m"
+    assert ds.hub_force_fixed_amplitude.attrs["units"] == "N"
     assert ds.pin_angle_amplitude.attrs["units"] == "degree"
 
 
