@@ -166,7 +166,7 @@ PARAMETERS: dict[str, Param] = {
     "scheme": Param("galpha", "1", "time integration scheme", choices=("galpha", "ed", "ep")),
     "rho_inf": Param(0.5, "1", "high-frequency spectral radius of the galpha scheme (ed decays "
                      "by construction with ρ∞ = 0; ep conserves)", minimum=0.0, maximum=1.0),
-    "steps_per_rev": Param(240, "1", "time steps per revolution", minimum=64, maximum=20000),
+    "steps_per_rev": Param(240, "1", "time steps per revolution", minimum=120, maximum=20000),
     "revolutions": Param(1, "1", "whole revolutions recorded once periodic", minimum=1,
                          maximum=50),
     "settle_revolutions": Param(6, "1", "revolutions with augmented lag and pin damping "
