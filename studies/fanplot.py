@@ -8,11 +8,10 @@ independent cases.
 from __future__ import annotations
 
 import math
-from typing import Any
 
 import xarray as xr
 
-from studies.parameters import ModelSpec, Output, Param, ParameterError
+from studies.parameters import ModelSpec, Output, Param, ParameterError, Parameters
 
 # Highest rotor speed (rad/s): well past any rotor's overspeed; the data set is for 27 rad/s.
 MAX_SPEED = 60.0
@@ -48,16 +47,16 @@ def speeds_of(text: str) -> list[float]:
     return speeds
 
 
-def check(p: Any) -> None:
+def check(p: Parameters) -> None:
     """The speeds parse as rotor speeds in range (raises ParameterError)."""
-    speeds_of(p["speeds"])
+    speeds_of(p.speeds)
 
 
-def simulate(p: Any) -> xr.Dataset:
+def simulate(p: Parameters) -> xr.Dataset:
     """Natural frequencies over (hub_speed, mode), as :func:`studies.blade.fanplot`."""
     from studies.blade import fanplot
 
-    return fanplot(speeds_of(p["speeds"]) or None, n_elements=p["elements"])
+    return fanplot(speeds_of(p.speeds) or None, n_elements=p.elements)
 
 
 SPEC = ModelSpec("fanplot", PARAMETERS, simulate, check,
