@@ -381,4 +381,4 @@ def _check_params(p: Parameters) -> None:
 
 SPEC = ModelSpec("pendulum", PARAMETERS, simulate, _check_params,
                  description="one bifilar pendulum on a hub spinning at constant speed",
-                 outputs=OUTPUTS)
+                 outputs=OUTPUTS, version="2")

@@ -151,4 +151,4 @@ def simulate(p: Parameters) -> xr.Dataset:
 
 SPEC = ModelSpec("collar", PARAMETERS, simulate, check,
                  description="collar sliding on a circle or cycloid (paper Figs. 10-12)",
-                 outputs=OUTPUTS)
+                 outputs=OUTPUTS, version="2")

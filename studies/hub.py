@@ -630,4 +630,4 @@ def _check(p: Parameters) -> None:
 
 SPEC = ModelSpec("hub", PARAMETERS, simulate, _check,
                  description="four-bladed hub with four bifilars on a fuselage restraint",
-                 outputs=OUTPUTS)
+                 outputs=OUTPUTS, version="2")
