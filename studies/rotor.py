@@ -734,4 +734,4 @@ def _check(p: Parameters) -> None:
 SPEC = ModelSpec("rotor", PARAMETERS, simulate, _check,
                  description="four-bladed elastic UH-60 rotor with aerodynamics and four "
                              "bifilars on a fuselage-beam",
-                 outputs=OUTPUTS)
+                 outputs=OUTPUTS, version="2")
