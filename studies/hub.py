@@ -138,7 +138,7 @@ PARAMETERS: dict[str, Param] = {
                          "plain second-order ep step)", choices=(*COMPOSITIONS, "none")),
     "error_estimate": Param(True, "1", "estimate the time-step error of the harmonics 0-8 "
                             "from the periodic response at about twice the step (stored as "
-                            "step_error_estimate; also made whenever richardson is true)"),
+                            "run_step_error_estimate; also made whenever richardson is true)"),
     "richardson": Param(True, "1", "extrapolate the harmonics 0-8 to zero step from the "
                         "response at about twice the time step (Richardson: error O(h^4) -> "
                         "O(h^6) composed, O(h^2) -> O(h^4) plain), storing the error "
