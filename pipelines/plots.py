@@ -689,7 +689,9 @@ def plot_archive(
             else:
                 paths += _harmonic_bars(ds, name, title, out, formats)
     else:
-        scalars = [n for n, o in spec.outputs.items() if o.is_scalar and n in ds]
+        # (the run facts, run_*, are archived but are not results to draw)
+        scalars = [n for n, o in spec.outputs.items()
+                   if o.is_scalar and n in ds and not n.startswith("run_")]
         if scalars:
             paths += _results(ds, scalars, cases, out, formats)
     for stem, names in _figures(spec, ds).items():

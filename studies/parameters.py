@@ -160,6 +160,8 @@ class Output:
         as one panel per case, any other history as one panel per output with one line per
         case. Every vector of a periodic model also gets its harmonic chart
         ``harmonics_<name>``; a non-periodic model gets its scalar results against its sweep.
+        A scalar result named ``run_*`` is a fact about the run (its time base, cost,
+        convergence): archived like any other, not drawn.
     optional
         A scalar result only some runs have (e.g. a step-error estimate, not made when it is
         not asked for): the run leaves it out rather than filling NaN, and the archive holds
