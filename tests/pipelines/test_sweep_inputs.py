@@ -441,3 +441,14 @@ def test_a_choice_outside_the_list_is_one_line(tmp_path):
         "collar", "--curve", "ellipse", "--theta0", "20", "--out", str(tmp_path / "c.nc")]))
     assert "--curve" in line and "ellipse" in line and "circle" in line
 
+
+
+@pytest.mark.slow
+def test_the_rotor_runs_at_its_fewest_steps_per_revolution(tmp_path):
+    """Fewer steps than the minimum make the rotor's Newton matrix singular within its first
+    revolution (64-112 measured); the minimum itself runs the free case."""
+    from studies.rotor import SPEC
+
+    low = SPEC.parameters["steps_per_rev"].minimum
+    out = run_case("rotor", SPEC.complete({"steps_per_rev": low}), str(tmp_path / "r.nc"))
+    assert out["status"] == STATUS_OK, out["message"]
