@@ -345,6 +345,10 @@ def parameters_class(model: str, declarations: Mapping[str, Param],
     key = (model, tuple(declarations.items()))
     cls = _CLASSES.get(key)
     if cls is None:
+        clash = sorted(set(declarations) & set(dir(Parameters)))
+        if clash:
+            raise ParameterError(f"model {model!r}: parameter name(s) {', '.join(clash)} are "
+                                 "taken by the parameter object itself; choose others")
         stem = "".join(part.capitalize() for part in model.replace("-", "_").split("_"))
         cls = dataclasses.make_dataclass(
             f"{stem}Parameters",
@@ -406,11 +410,14 @@ class ModelSpec:
 
     def __post_init__(self) -> None:
         check_outputs(self.outputs)
+        # (a frozen dataclass: its derived attribute set once, here)
+        object.__setattr__(self, "_parameters_type",
+                           parameters_class(self.name, self.parameters, self.check))
 
     @property
     def parameters_type(self) -> type[Parameters]:
         """The frozen dataclass of this model's parameters."""
-        return parameters_class(self.name, self.parameters, self.check)
+        return self._parameters_type  # type: ignore[attr-defined]
 
     @property
     def periodic(self) -> bool:

@@ -156,3 +156,8 @@ def test_rotor_scales_its_fuselage_beam_bending_stiffness():
     assert d.bending_stiffness == 0.5 * p.fuselage_bending_stiffness
     assert d.fuselage_stiffness == pytest.approx(
         3 * d.bending_stiffness / p.fuselage_length**3, rel=1e-15)
+
+
+def test_parameter_names_that_the_object_uses_are_refused():
+    with pytest.raises(ParameterError, match="replace are taken by the parameter object"):
+        ModelSpec("test-clash", {"replace": Param(1.0)}, _simulate)
