@@ -2,17 +2,25 @@
 
 ::
 
-    bifilar sweep STUDY.toml --out DIR [--workers N | --scheduler ADDRESS] [--retry-failed]
+    bifilar sweep STUDY.toml --out DIR [--workers N | --scheduler ADDRESS | --cluster slurm|pbs]
+                  [--worker-timeout SECONDS] [--retry-failed] [--quiet]
     bifilar plot ARCHIVE --out DIR [--format png --format pdf]
-    bifilar run [--out DIR] [--workers N | --scheduler ADDRESS]
+    bifilar run [--out DIR] [--model rotor|hub] [--workers N | --scheduler ADDRESS | --cluster …]
+    bifilar collar --curve circle|cycloid --theta0 DEG --out FILE.nc   (or --figures DIR)
+    bifilar pendulum --amplitude DEG --out FILE.nc                    (or --figures DIR)
     bifilar fanplot [--speeds RAD_PER_S ...] --out FILE.nc
+
+A sweep holds the lock file ``DIR/sweep.lock`` while it runs: a second sweep into the same
+``DIR`` is refused (a lock left by a process that no longer runs on this host is taken over,
+with a line saying so).
 
 Exit status: 0 when every case of the study finished ok; 1 when the sweep finished but some
 cases failed or did not run (the archive is still written, and the last line on stderr says how
 many and where their messages are); 2 for a problem the user can fix (an invalid study file, a
 parameter out of range, a missing file, an unreachable scheduler, an archive with nothing to
 plot), reported as one line ``error: ...`` on stderr, never a traceback (a traceback means a
-bug); 130 for an interrupted sweep, which resumes when the same command is run again.
+bug); 130 for an interrupted sweep, which resumes when the same command is run again. The
+single-model commands exit 1 when their case failed (its file then holds the failure record).
 """
 
 from __future__ import annotations

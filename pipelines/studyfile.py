@@ -29,6 +29,10 @@ cross-checks per case (``ModelSpec.check``, which rejects impossible geometry), 
 combination of the values a cross-check reads checked once (:class:`CrossChecks`). A study
 holds at most :data:`MAX_CASES` cases.
 
+An optional ``[cluster]`` table gives the job resources of ``--cluster slurm|pbs`` (``cores``,
+``memory``, ``walltime``, ``queue``, ``account``, ``jobs``; see :mod:`pipelines.cluster`); it
+does not change the cases or their ids.
+
 Each case's id is a hash of the model name, the code version (package version and the model's
 ``ModelSpec.version``) and the complete parameters (:func:`make_case_id`): rerunning a study
 computes only the cases without a file, and cases cached by another version of the code or of
@@ -339,8 +343,10 @@ def load_study(path: str | os.PathLike[str]) -> Study:
         With a one-line message naming the file and the problem: unreadable or invalid TOML
         (with its line), missing or unknown model, unknown top-level key or parameter, wrong
         type or out-of-range value, empty or non-list sweep value, a key both swept and fixed,
-        both or neither of ``[sweep]`` and ``[[cases]]``, duplicate cases, and any case whose
-        complete parameter set the model rejects (``ModelSpec.complete``).
+        both or neither of ``[sweep]`` and ``[[cases]]``, duplicate cases, more than
+        :data:`MAX_CASES` cases (refused before the cases are made), a bad ``[cluster]``
+        table, and any case whose complete parameter set the model's cross-checks reject
+        (``ModelSpec.check``).
     """
     path = Path(path)
     try:
