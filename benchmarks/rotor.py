@@ -21,10 +21,11 @@ import time
 import numpy as np
 
 from solver.system import System
+from studies.parameters import Parameters
 from studies.rotor import SPEC, build, integrator, run
 
 
-def per_revolution(p: dict, revolutions: int, profile: bool) -> dict:
+def per_revolution(p: Parameters, revolutions: int, profile: bool) -> dict:
     t0 = time.perf_counter()
     model, parts = build(p)
     system = System(model)
@@ -51,16 +52,17 @@ def per_revolution(p: dict, revolutions: int, profile: bool) -> dict:
             "newton_per_step": round(integ.n_iterations / integ.n_steps, 2)}
 
 
-def per_case(p: dict) -> dict:
+def per_case(p: Parameters) -> dict:
     t0 = time.perf_counter()
     ds = run(p)
     wall = time.perf_counter() - t0
-    revs = ds.attrs["transient_revolutions"] + ds.attrs["revolutions"]
+    revs = ds["run_transient_revolutions"].item() + ds["run_revolutions"].item()
     return {"bifilar": p.bifilar, "wall_s": round(wall, 1), "revolutions": int(revs),
             "seconds_per_rev": round(wall / revs, 2),
-            "newton_per_step": round(ds.attrs["newton_iterations"] / ds.attrs["steps"], 2),
+            "newton_per_step": round(
+                ds["run_newton_iterations"].item() / ds["run_steps"].item(), 2),
             "thrust_coefficient_over_solidity": round(
-                ds.attrs["thrust_coefficient_over_solidity"], 4)}
+                ds["thrust_coefficient_over_solidity"].item(), 4)}
 
 
 def main() -> None:
