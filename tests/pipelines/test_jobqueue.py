@@ -101,3 +101,32 @@ def test_cluster_is_exclusive_with_workers_and_scheduler(tmp_path):
                                                "--out", str(tmp_path / "out"), "--cluster",
                                                "pbs", *extra])
         assert result.exit_code == 2 and "exclusive" in result.stderr, result.output
+
+
+# the local runner kills its job processes at the end without waiting for them
+@pytest.mark.filterwarnings("ignore:subprocess .* is still running:ResourceWarning")
+@pytest.mark.filterwarnings("ignore::pytest.PytestUnraisableExceptionWarning")
+def test_a_sweep_runs_on_worker_jobs(tmp_path, monkeypatch):
+    """The whole path of --cluster (jobs scaled to the [cluster] table, the wait for them,
+    one worker process per core) on dask-jobqueue's local job runner, which starts each job
+    as a subprocess of this machine instead of submitting it."""
+    pytest.importorskip("dask_jobqueue")
+    import dask_jobqueue
+    import dask_jobqueue.local
+
+    from pipelines import cluster
+    from pipelines.archive import STATUS_OK, open_archive
+    from pipelines.sweep import run_sweep
+
+    repo = Path(__file__).resolve().parents[2]
+    monkeypatch.setenv("PYTHONPATH", str(repo))  # the jobs import the test model
+    monkeypatch.setitem(cluster.JOBQUEUE_CLUSTERS, "local", "LocalCluster")
+    monkeypatch.setattr(dask_jobqueue, "LocalCluster", dask_jobqueue.local.LocalCluster,
+                        raising=False)
+    # the local runner executes the job's command without a shell: no exports before it
+    monkeypatch.setattr(cluster, "MALLOC_ENVIRON", {})
+    study = study_file(tmp_path / "s.toml", '[cluster]\ncores = 2\nmemory = "2GB"\njobs = 1\n')
+    archive = run_sweep(study, tmp_path / "out", cluster="local", worker_timeout=120,
+                        progress=False)
+    ds = open_archive(archive)
+    assert (ds["status"] == STATUS_OK).all(), ds["message"].values
