@@ -136,10 +136,12 @@ def run_case(model_name: str, params: Mapping[str, Any], case_file: str,
     """Run one case and write its case file atomically; the dask task of a sweep.
 
     Any exception of the model (or a result with ``attrs["status"] == "failed"`` or
-    ``run_converged == 0``, a simulation that stopped early) is caught and recorded as a
-    failed case with its message: one bad case must not stop an overnight sweep. What the case
-    file keeps is what the model's outputs declare (:func:`pipelines.archive.case_summary`).
-    Only a small summary travels back to the client; the data stay in the file.
+    ``run_converged == 0``, a simulation that stopped early, or an archived output that came
+    out NaN, named in the message) is caught and recorded as a failed case with its message:
+    one bad case must not stop an overnight sweep. What the case file keeps is what the
+    model's outputs declare (:func:`pipelines.archive.case_summary`), or with ``whole`` the
+    model's whole result. Only a small summary travels back to the client; the data stay in
+    the file.
 
     Parameters
     ----------
