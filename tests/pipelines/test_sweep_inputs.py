@@ -309,6 +309,23 @@ def test_a_stale_lock_is_taken_over_with_a_line(tmp_path, no_cases):
     assert not (tmp_path / "out" / LOCK_NAME).exists()
 
 
+def test_an_empty_lock_is_being_written_unless_it_is_old(tmp_path, no_cases):
+    """A lock file without its owner: one being created right now is respected, one older
+    than a writer needs (its writer died between creating and filling it) is taken over."""
+    out = tmp_path / "out"
+    out.mkdir()
+    lock = out / LOCK_NAME
+    lock.touch()
+    study = str(study_file(tmp_path / "s.toml"))
+    line = _refuses_before_work(["sweep", study, "--out", str(out)], no_cases)
+    assert "creating the lock file now" in line
+    old = lock.stat().st_mtime - 3600
+    os.utime(lock, (old, old))
+    result = CliRunner().invoke(cli.main, ["sweep", study, "--out", str(out)])
+    assert result.exit_code == 1, result.output  # ran (nothing computed)
+    assert "an unfinished lock file" in result.stderr and not lock.exists()
+
+
 # --- a scheduler without workers ----------------------------------------------------------------
 
 
