@@ -43,7 +43,7 @@ def collect(include_hub: bool = True) -> dict:
             for scheme in ("ep", "ed", "galpha"):
                 key = f"collar_{curve}_{inertia:g}_{scheme}"
                 p = {"curve": curve, "theta0": 40.0, "inertia": inertia, "scheme": scheme,
-                     "steps_per_period": 200, "periods": 1.5}
+                     "steps_per_period": 200, "periods": 2.0}
                 _numeric(key, timed(key, lambda p=p: collar.run(p)), out)
     for hole in ("circle", "cycloid", "epicycloid"):
         for scheme in ("ep", "ed", "galpha"):
