@@ -386,6 +386,18 @@ def _time_axis(ds: xr.Dataset, sel: dict[str, int]) -> tuple[np.ndarray, str]:
     return ds["time"].isel(sel).values, "time (s)"
 
 
+def _revolution(ds: xr.Dataset, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """A history drawn: over one revolution (periodic, on the archive's uniform azimuth grid)
+    smooth and closed, by Fourier interpolation (exact for the band-limited periodic signal)
+    with the first sample repeated at 360°; against time, as archived."""
+    if "psi" not in ds.coords or not np.isfinite(y).all():
+        return x, y
+    points = max(ORBIT_POINTS, y.size)
+    fine = _upsample(y, points)
+    psi = x[0] + 360.0 * np.arange(points + 1) / points
+    return psi, np.append(fine, fine[0])
+
+
 def _finish_axis(ax: Any, ds: xr.Dataset) -> None:
     if "psi" in ds.coords:
         _psi_axis(ax)
@@ -433,8 +445,8 @@ def _indexed_history(ds: xr.Dataset, name: str, stem: str, cases: Cases, out_dir
             x, xlabel = _time_axis(ds, case.sel)
             values = var.isel(case.sel)
             for k, label, linestyle in entries:
-                ax.plot(x, values.isel({index: k}).values, linestyle=linestyle,
-                        color=case.style["color"], label=label)
+                ax.plot(*_revolution(ds, x, values.isel({index: k}).values),
+                        linestyle=linestyle, color=case.style["color"], label=label)
             ax.set_title(case.label, fontsize="medium")
             ax.set_ylabel(units or name)
             _finish_axis(ax, ds)
@@ -513,6 +525,11 @@ def _histories(ds: xr.Dataset, names: list[str], stem: str, cases: Cases, out_di
     """Histories without an extra dimension: one panel per history (its name as the panel's
     title, its units on the axis: long names as axis labels collide), one line per case."""
     ok = [c for c in cases if c.ok]
+    # one display unit per physical unit in the figure (x and y of a force both in kN)
+    by_units: dict[str, tuple[float, str]] = {}
+    for units in {ds[n].attrs.get("units", "") for n in names}:
+        by_units[units] = _display_units(units, np.concatenate(
+            [ds[n].values.ravel() for n in names if ds[n].attrs.get("units", "") == units]))
     paths: list[Path] = []
     pages = _pages(ok)
     for page, chunk in enumerate(pages):
@@ -520,11 +537,11 @@ def _histories(ds: xr.Dataset, names: list[str], stem: str, cases: Cases, out_di
         axes = fig.subplots(len(names), 1, sharex=True, squeeze=False)[:, 0]
         for ax, name in zip(axes, names, strict=True):
             var = ds[name]
-            scale, units = _display_units(var.attrs.get("units", ""), var.values)
+            scale, units = by_units[var.attrs.get("units", "")]
             for i, case in enumerate(chunk):
                 x, xlabel = _time_axis(ds, case.sel)
-                _line(ax, x, var.isel(case.sel).values * scale, case.style, i, len(chunk),
-                      label=case.label)
+                _line(ax, *_revolution(ds, x, var.isel(case.sel).values * scale), case.style,
+                      i, len(chunk), label=case.label)
             ax.set_title(var.attrs.get("long_name", name), fontsize="medium")
             ax.set_ylabel(_units_label(units))
             _finish_axis(ax, ds)
