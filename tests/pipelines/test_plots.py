@@ -127,8 +127,12 @@ def test_pin_angles_show_pins_a_and_b(archives, monkeypatch, tmp_path):
         a, b = ax.lines
         assert (a.get_linestyle(), b.get_linestyle()) == ("-", "-.")
         pins = ds["pin_angle"].isel(case=case).transpose("bifilar_index", ...).values
-        np.testing.assert_array_equal(a.get_ydata(), pins[0])
-        np.testing.assert_array_equal(b.get_ydata(), pins[2])
+        psi = ds["psi"].values
+        # drawn smooth through the archived samples (Fourier interpolation, read back here
+        # linearly between its 720 points: 0.3 % of the swing)
+        for line, pin in ((a, pins[0]), (b, pins[2])):
+            drawn = np.interp(psi, line.get_xdata(), line.get_ydata())
+            np.testing.assert_allclose(drawn, pin, atol=3e-3 * np.abs(pin).max())
         # antiphase (the 3P swing seen from bifilars half a revolution apart)
         assert np.corrcoef(a.get_ydata(), b.get_ydata())[0, 1] < -0.99
 
