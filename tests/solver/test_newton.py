@@ -61,7 +61,9 @@ def test_kept_factors_that_contract_fast_are_kept():
     res = newton(lambda x: A @ x - B, lambda x: A, x0, max_abs, TOL, _kept_factors(0.99),
                  estimate=True)
     assert res.converged and res.factorizations == 0, res
-    assert max_abs(res.x - X) <= TOL
+    # the estimate is the contraction measured from two updates of about 1e-8: its roundoff
+    # (measured 2.3e-6 relative, with NumPy 2.4) may put the error a hair past the tolerance
+    assert max_abs(res.x - X) <= TOL * (1.0 + 1e-4)
 
 
 def test_weighted_error_is_the_weighted_maximum_norm():
