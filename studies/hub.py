@@ -67,7 +67,8 @@ from studies.absorbers import (
 )
 from studies.absorbers import OUTPUTS as ABSORBER_OUTPUTS
 from studies.absorbers import PARAMETERS as ABSORBERS
-from studies.equivalent import equivalent_absorber
+from studies.bifilar import BifilarParts
+from studies.equivalent import EquivalentParts, equivalent_absorber
 from studies.harmonics import N_MAX
 from studies.holes import MAX_TANGENT_ANGLE, Holes
 from studies.parameters import ModelSpec, Output, Param, ParameterError, Parameters
@@ -415,7 +416,8 @@ def _linear_start_checked(p: Parameters, d: HubDesign) -> tuple[AbsorberStart, s
     return start, ""
 
 
-def build(p: Parameters, d: HubDesign | None = None, start: AbsorberStart | None = None):
+def build(p: Parameters, d: HubDesign | None = None, start: AbsorberStart | None = None
+          ) -> tuple[Model, RigidBody, RigidBody, list[BifilarParts] | EquivalentParts]:
     """The hub model: (model, hub, shaft, parts) with handles for outputs; ``parts`` is the
     list of :class:`BifilarParts` or, for ``bifilar = "equivalent"``, the
     :class:`studies.equivalent.EquivalentParts`. ``d`` (the derived design) and ``start`` (the
