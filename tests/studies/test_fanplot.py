@@ -35,8 +35,10 @@ def test_fanplot_at_27_rad_s_against_bowen_davies(at_27, label, tol):
     assert f == pytest.approx(published(label), rel=tol)
 
 
+@pytest.mark.slow
 def test_fanplot_branches_follow_bowen_davies():
-    """The whole fan plot, 0 … Ω_ref, branch by branch: the modes named at 0.1 Ω_ref and
+    """The whole fan plot, 0 … Ω_ref, branch by branch (eleven speeds; the default tier checks
+    27 rad/s and 0 above): the modes named at 0.1 Ω_ref and
     followed by their shapes land on the digitized branches through the flap 3 / lag 2 /
     torsion veerings. Measured worst differences: flap 2 −4.8 % (at 0.1 Ω_ref, 3.4 Hz), flap 3
     −2.1 %, flap 4 +3.8 % (Ω = 0), lag 2 −1.2 %, torsion −3.0 % (Ω = 0). Flap 1 and lag 1
