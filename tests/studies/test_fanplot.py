@@ -67,8 +67,11 @@ def test_fanplot_labels_and_zero_speed():
 
 
 def test_fanplot_command_writes_archive_and_figure(tmp_path):
+    """The command's archive and figure (two beam elements: the layout, not the accuracy,
+    which the tests above check at the default six)."""
     out = tmp_path / "fan.nc"
-    res = CliRunner().invoke(main, ["fanplot", "--speeds", "10", "27", "--out", str(out)])
+    res = CliRunner().invoke(main, ["fanplot", "--speeds", "10", "27", "--elements", "2",
+                                    "--out", str(out)])
     assert res.exit_code == 0, res.output
     ds = xr.open_dataset(out)
     assert ds.frequency.dims == ("hub_speed", "mode")
