@@ -18,20 +18,26 @@ written by :func:`plot_archive` for a per-rev periodic model (the hub):
     3P and 5P rotating, 4P and 8P fixed; x and y as groups), one bar per case, for every
     declared in-plane vector (the hub displacement in the rotating frame, Fig. 17; the hub
     in-plane force in the fixed frame, Figs. 18–19; …); a line of text gives the largest of the
-    other harmonics. A Cartesian sweep with a numeric dimension (or of more than
-    :data:`MAX_BAR_CASES` cases) gets response curves instead:
+    other harmonics. A Cartesian sweep with a numeric dimension gets response curves instead:
     ``harmonics_<vector>_vs_<parameter>``, those harmonics' amplitudes against the first numeric
-    swept parameter, one line per value of the others.
+    swept parameter, one line per value of the others. Categories (a case list, a string
+    parameter such as ``hole``) are always bars. A harmonic whose amplitude stays below
+    :data:`NOISE_LEVEL` of the figure's largest is roundoff: its bars or panel are left out.
 ``<figure>`` of the declarations, over one revolution
-    Vectors as smooth orbits (``orbits``: hub and bifilar centre of mass, Fig. 15; Fourier
-    interpolation of the archived revolution); a history with an
-    extra dimension as one panel per case (``pin_angles``, Fig. 14; cases where it is zero
-    throughout, e.g. locked bifilars, are left out); other histories as one panel each with one
-    line per case (``hub_force_history``, Fig. 16).
+    Vectors as smooth orbits about their mean (``orbits``: hub and bifilar centre of mass,
+    Fig. 15; the mean, the static deflection, is given in the legend); a history with an extra
+    dimension as one panel per case (``pin_angles``, Fig. 14: pins A and B, the bifilars 180°
+    apart; cases where it is zero throughout, e.g. locked bifilars, are left out); other
+    histories as one panel each with one line per case (``hub_force_history``, Fig. 16).
+    Periodic histories are drawn smooth (Fourier interpolation of the archived revolution).
 
 For any other model (collar, pendulum): ``results`` (or ``results_vs_<parameter>`` for a
-sweep), the declared scalar results against the cases, and the declared histories against time
-(``<figure>``).
+sweep), the declared scalar results against the first numeric swept parameter, or as grouped
+bars over categories, and the declared histories against time (``<figure>``).
+
+Each case has one colour, line style and marker in every figure (by its position in the
+archive), so that coinciding curves stay distinguishable and a case is recognised across
+figures.
 
 Time-history figures hold at most :data:`CASES_PER_PAGE` cases; more go on further pages
 (``pin_angles_p2`` …).
