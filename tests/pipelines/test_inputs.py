@@ -44,6 +44,7 @@ from pipelines.sweep import consolidate_study
 from pipelines.worker import run_case
 from studies import bifilar, collar, hub
 from studies.parameters import Param, ParameterError
+from tests.pipelines.helpers import one_error_line
 
 REPO = Path(__file__).resolve().parents[2]
 if str(REPO) not in sys.path:
@@ -56,15 +57,6 @@ SPECS = {"hub": hub.SPEC, "pendulum": bifilar.SPEC, "collar": collar.SPEC}
 FAST = settings(max_examples=100, deadline=None, derandomize=True,
                 suppress_health_check=[HealthCheck.function_scoped_fixture,
                                        HealthCheck.too_slow])
-
-
-def one_error_line(result: Any) -> str:
-    """The single ``error:`` line of a refused command (exit status 2, no traceback)."""
-    assert result.exit_code == 2, (result.exit_code, result.output, result.exception)
-    assert "Traceback" not in result.output
-    lines = result.stderr.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith("error: "), result.stderr
-    return lines[0]
 
 
 # --- declarations -------------------------------------------------------------------------------

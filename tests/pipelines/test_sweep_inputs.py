@@ -36,21 +36,13 @@ from pipelines.sweep import run_sweep
 from pipelines.worker import compile_notice, run_case
 from studies.parameters import ModelSpec, Output, Param
 from studies.registry import register
+from tests.pipelines.helpers import one_error_line
 
 REPO = Path(__file__).resolve().parents[2]
 if str(REPO) not in sys.path:
     sys.path.insert(0, str(REPO))
 models = importlib.import_module("tests.pipelines.models")
 MODEL = "tests.pipelines.models:SPEC"
-
-
-def one_error_line(result: Any) -> str:
-    """The single ``error:`` line of a refused command (exit status 2, no traceback)."""
-    assert result.exit_code == 2, (result.exit_code, result.output, result.exception)
-    assert "Traceback" not in result.output
-    lines = result.stderr.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith("error: "), result.stderr
-    return lines[0]
 
 
 def study_file(path: Path, body: str = "[sweep]\ntuning_order = [2.9, 3.1]\n",
