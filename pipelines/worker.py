@@ -38,9 +38,10 @@ from studies.registry import resolve_model
 
 # Least time between two forwarded progress lines of one case (s); the first always goes.
 PROGRESS_INTERVAL = 10.0
-# Wall-clock minutes numba takes to compile the solver's kernels into its cache on a first run
-# (the rotor model, most kernels; measured 1.5-2 minutes on a 2-core machine).
-COMPILE_MINUTES = 2
+# Wall-clock seconds numba takes to compile the solver's kernels into its cache on a first run
+# (the rotor model, most kernels: measured 20-30 s with two workers compiling at once in a
+# fresh environment on an idle 2-core machine; a loaded machine takes several times that).
+COMPILE_SECONDS = 30
 
 
 class ModelFailure(RuntimeError):
@@ -105,8 +106,8 @@ def compile_notice(say: Any) -> Iterator[None]:
             nonlocal told
             if not told:
                 told = True
-                say(f"compiling kernels (first run, about {COMPILE_MINUTES} minutes; numba "
-                    "caches them for the next runs)...")
+                say(f"compiling kernels (first run, about {COMPILE_SECONDS} s on an idle "
+                    "machine; numba caches them for the next runs)...")
 
         def on_end(self, ev: Any) -> None:
             pass
