@@ -24,7 +24,8 @@ HEADER = ("| {key} | 4P Fx, Fy (N) | 4P Fz (N) | 4P Mx, My (N m) | 3P, 5P rotati
 
 def _row(case) -> str:
     if int(case["status"]) != 0:
-        return f"failed: {str(case['message'].values)[:120]}"
+        message = str(case["message"].values).split(" (")[0]
+        return f"failed: {message} |" + " |" * 8
 
     def amp(name, k, d=None):
         a = case[name + "_amplitude"].sel(harmonic=k)
@@ -54,7 +55,8 @@ def main() -> None:
     *outer, last = dims
     for combo in itertools.product(*(ds[d].values for d in outer)):
         if outer:
-            print(", ".join(f"{d} = {v}" for d, v in zip(outer, combo, strict=True)))
+            print("**" + ", ".join(f"{d} = {v}" for d, v in zip(outer, combo, strict=True))
+                  + "**\n")
         print(HEADER.format(key=last))
         print("|" + "---|" * 10)
         sub = ds.sel(dict(zip(outer, combo, strict=True)))
