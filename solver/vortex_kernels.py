@@ -6,8 +6,8 @@ r1 = P − A, r2 = P − B, r0 = B − A and h the distance of P from the segmen
     v = Γ/(4π) · (cos θ1 − cos θ2) / h · ê,    (cos θ1 − cos θ2) = r0 · (r1/|r1| − r2/|r2|) / |r0|,
     ê = (r1 × r2) / |r1 × r2|,  |r1 × r2| = |r0| h,
 
-(Katz & Plotkin, *Low-Speed Aerodynamics*, 2nd ed., §2.11). A rotor's tip vortices have viscous
-cores: the Vatistas profile with n = 2 (Bagai & Leishman, JAHS 38(3), 1993) replaces the
+(Katz & Plotkin, *Low-Speed Aerodynamics*, 2nd ed.). A rotor's tip vortices have viscous
+cores: the Vatistas profile with n = 2 (Vatistas, Kozel & Mih, Exp. Fluids 11, 1991) replaces the
 potential 1/h by h / √(h⁴ + r_c⁴), so the swirl peaks at 2^{−1/2} of the potential value at
 h = r_c and vanishes on the axis. With r_c = 0 the segment is potential; a point on its line
 (h = 0) gets no velocity from it.

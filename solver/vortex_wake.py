@@ -11,7 +11,7 @@ flow λ_c = λ_f + λ_i (free stream plus induced, on ΩR). Two descent laws:
 
 * ``"rigid"``: λ_i uniform, the classical skewed helix (tan χ = μ/λ);
 * ``"beddoes"``: Beddoes' generalized wake (Beddoes, 10th European Rotorcraft Forum, 1984;
-  as given by Leishman, *Principles of Helicopter Aerodynamics*, 2nd ed., §10.6): over the
+  as given by Leishman, *Principles of Helicopter Aerodynamics*, 2nd ed., ch. 10): over the
   disk λ_i = λ_0 [1 + E (x − |y|³)], downstream of it λ_i = 2 λ_0 (1 − E |y|³), with
   E = χ/2, so that the wake descends slowly at the front of the disk, fast at its rear, and
   the far wake at twice the mean induced flow of momentum theory.

@@ -8,7 +8,7 @@ References, independent of the kernel:
 * the vortex ring's velocity field in closed form with complete elliptic integrals (Lamb,
   *Hydrodynamics*, §161; on the axis Γa²/[2(a² + z²)^{3/2}]), against polygons of N and 2N
   segments extrapolated in N (the inscribed polygon's error is a series in N⁻²);
-* the Vatistas n = 2 core profile h/√(h⁴ + r_c⁴) (Bagai & Leishman 1993) at h = r_c and far
+* the Vatistas n = 2 core profile h/√(h⁴ + r_c⁴) (Vatistas, Kozel & Mih 1991) at h = r_c and far
   from the core.
 """
 
