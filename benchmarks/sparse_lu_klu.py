@@ -19,13 +19,12 @@ of
 - ``solve``: one right-hand side with the factors of a refactored matrix (the conversions to
   and from kvxopt's matrix type included for KLU),
 
-and, in the row ``KLU-r``, KLU's own refactorization with the kept pivots (``klu_refactor``,
-which kvxopt's Python interface leaves out) called through ctypes on the KLU library that
-kvxopt's wheel ships: what a binding that exposed it would cost, less its call overhead,
-
 and the largest relative residual ‖A x − b‖∞ / (‖A‖∞ ‖x‖∞ + ‖b‖∞) of each over the test
-set (both solve the same systems). The machine may be shared: the medians over the repeats
-damp the interference, the minimum is not used. kvxopt is in the ``bench`` extra.
+set (both solve the same systems). The row ``KLU-r`` is KLU's own refactorization with the
+kept pivots (``klu_refactor``, which kvxopt's Python interface leaves out) called through
+ctypes on the KLU library that kvxopt's wheel ships: what a binding that exposed it would
+cost. The machine may be shared: the medians over the repeats damp the interference. kvxopt
+is in the ``bench`` extra.
 """
 
 from __future__ import annotations
