@@ -278,10 +278,9 @@ def plot(archive: Path, out_dir: Path, formats: tuple[str, ...]) -> None:
               help="Output directory: cases/, archive.nc and plots/.")
 @click.option("--model", "model", default="rotor", show_default=True,
               type=click.Choice(sorted(BUILT_IN_STUDIES)),
-              help="rotor: the paper's UH-60 rotor with elastic blades and aerodynamics (under "
-                   "a minute per case once its kernels are compiled: the built-in study takes "
-                   "about 1.5 minutes with 2 workers, 3 in a fresh install); hub: a rigid hub "
-                   "with assumed 3P/5P blade shears (under a minute).")
+              help="rotor: the paper's UH-60 rotor with elastic blades and aerodynamics; "
+                   "hub: a rigid hub with assumed 3P/5P blade shears (faster). The README "
+                   "gives the times.")
 @workers_option
 @scheduler_option
 @cluster_option

@@ -169,8 +169,8 @@ PARAMETERS: dict[str, Param] = {
     "steps_per_rev": Param(240, "1", "time steps per revolution", minimum=120, maximum=20000),
     "revolutions": Param(1, "1", "whole revolutions recorded once periodic", minimum=1,
                          maximum=50),
-    "settle_revolutions": Param(6, "1", "revolutions with augmented lag and pin damping "
-                                "before the nominal run", minimum=0, maximum=200),
+    "settle_revolutions": Param(6, "1", "revolutions with augmented lag and fuselage "
+                                "damping before the nominal run", minimum=0, maximum=200),
     "settle_damping_factor": Param(10.0, "1", "factor on the lag and fuselage dampers at the "
                                    "start of settling (falls to 1 over the settling "
                                    "revolutions)", minimum=1.0, maximum=1000.0),
