@@ -111,13 +111,16 @@ def one_case(repeat: int) -> None:
             t0 = time.process_time()
             last[name] = run(given)
             cpu[name].append(time.process_time() - t0)
+    def optional(ds, name):  # a run without the estimate has none of its outputs
+        return float(f"{ds[name].item():.3g}") if name in ds else None
+
     for name, ds in last.items():
         print(json.dumps({
             "case": name, "cpu_seconds_best": round(min(cpu[name]), 2),
             "cpu_seconds": [round(c, 2) for c in cpu[name]],
             "revolutions": ds["run_simulated_revolutions"].item(),
-            "of_which_at_the_coarser_step": ds["run_estimate_revolutions"].item(),
-            "step_error_estimate": float(f"{ds['run_step_error_estimate'].item():.3g}"),
+            "of_which_at_the_coarser_step": optional(ds, "run_estimate_revolutions"),
+            "step_error_estimate": optional(ds, "run_step_error_estimate"),
             "steps": ds["run_steps"].item(), "substeps": ds["run_substeps"].item(),
             "newton_iterations": ds["run_newton_iterations"].item(),
             "harmonics_error": float(f"{error(ds):.3g}")}))
