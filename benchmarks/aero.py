@@ -16,9 +16,14 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
+
+# the hovering rotor is the lifting-line tests' model: the repository root on the path
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from solver.simulation import simulate
 from solver.system import System
