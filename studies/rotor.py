@@ -122,7 +122,10 @@ NEWTON_STEPS = 240
 # 0.12 → 0.083 factorizations (×10: 2.39; ×100: 2.27, no further gain). Table 1's case 1 at a
 # periodicity tolerance of 1e-3, against Newton at 1e-9: 4P hub moment (177.9, 123.9) N·m
 # against (178.1, 123.4), as close as with the plain tolerance (177.5, 123.1); the 4P hub
-# force within 0.2 % in both.
+# force within 0.2 % in both. Above NEWTON_STEPS the wake states are held to Newton's own
+# tolerance: relaxed there, their error keeps the lightly damped lag-regressive/fuselage mode
+# (0.75/rev in the fixed frame) alive at 1–2 % of the response, and the locked case never
+# shoots to periodic at 360 or 480 steps/rev (it does in 13.5 and 14 revolutions without).
 WAKE_TOLERANCE = 30.0
 
 PARAMETERS: dict[str, Param] = {
@@ -524,11 +527,12 @@ def newton_tolerance(steps_per_rev: int) -> float:
 
 def integrator(system: System, p: Parameters, h: float, parts: RotorParts | None = None,
                book_work: bool = False, tol: float | None = None,
-               wake_tolerance: float = WAKE_TOLERANCE) -> Integrator:
+               wake_tolerance: float | None = None) -> Integrator:
     """The time integrator ``p`` asks for, with step ``h`` (s); ρ∞ applies to ``galpha``.
     Given the model's ``parts``, the Newton factors kept from step to step turn with the hub
     and blades (:func:`turning`), and the lifting lines' wake states are judged on
-    ``wake_tolerance`` times Newton's tolerance (default :data:`WAKE_TOLERANCE`). The work of
+    ``wake_tolerance`` times Newton's tolerance (default :data:`WAKE_TOLERANCE` up to
+    :data:`NEWTON_STEPS` steps per revolution, 1 above). The work of
     the loads is booked only with ``book_work`` (an energy check): a case reads none, and
     booking it costs a force evaluation per step.
     ``tol``: Newton's relative tolerance (default :func:`newton_tolerance` of the steps per
@@ -537,6 +541,8 @@ def integrator(system: System, p: Parameters, h: float, parts: RotorParts | None
     spin = None if parts is None else turning(system, parts, p.hub_speed)
     if tol is None:
         tol = newton_tolerance(p.steps_per_rev)
+    if wake_tolerance is None:
+        wake_tolerance = WAKE_TOLERANCE if p.steps_per_rev <= NEWTON_STEPS else 1.0
     if not (math.isfinite(wake_tolerance) and wake_tolerance > 0):
         raise ValueError(f"wake_tolerance = {wake_tolerance!r} must be finite and > 0")
     scale = None
