@@ -33,7 +33,7 @@ from collections.abc import Iterator
 from importlib import resources
 from importlib.resources.abc import Traversable
 from pathlib import Path
-from typing import Any, NoReturn
+from typing import Any
 
 import click
 
@@ -48,6 +48,7 @@ from pipelines.checks import (
 from pipelines.cluster import SweepError, check_cluster
 from pipelines.fanplot_command import fanplot
 from pipelines.options import OutPath
+from pipelines.single import EXIT_FAILED_CASES, fail
 from pipelines.study_commands import collar, pendulum
 from pipelines.studyfile import StudyError
 from pipelines.sweep import CASES_DIR, run_sweep
@@ -55,8 +56,6 @@ from studies.parameters import ParameterError
 
 # The built-in study of each model `bifilar run --model` offers.
 BUILT_IN_STUDIES = {"rotor": "rotor_study.toml", "hub": "hub_study.toml"}
-EXIT_FAILED_CASES = 1
-EXIT_USER_ERROR = 2
 EXIT_INTERRUPTED = 130
 
 # Errors whose message tells the user what to fix; anything else is a bug and keeps its traceback.
@@ -68,11 +67,6 @@ def default_study(model: str = "rotor") -> Traversable:
     """The built-in study of ``model``: the paper's Table 1 cases 0–3 and the linear
     equivalent of case 1, on the rotor model (default) or the hub model."""
     return resources.files("studies") / BUILT_IN_STUDIES[model]
-
-
-def _fail(message: str) -> NoReturn:
-    click.echo(f"error: {' '.join(message.split())}", err=True)
-    raise click.exceptions.Exit(EXIT_USER_ERROR)
 
 
 @contextlib.contextmanager
@@ -100,7 +94,7 @@ def _user_errors() -> Iterator[None]:
     try:
         yield
     except USER_ERRORS as exc:
-        _fail(str(exc))
+        fail(str(exc))
     except KeyboardInterrupt:
         click.echo("error: interrupted; finished cases are kept, run the same command again "
                    "to resume", err=True)
@@ -132,10 +126,10 @@ def _exit_if_not_ok(line: str | None) -> None:
 def _check_cluster(workers: int | None, scheduler: str | None,
                    cluster: str | None = None) -> None:
     if workers is not None and scheduler is not None:
-        _fail("--workers and --scheduler are mutually exclusive: --workers starts a local "
+        fail("--workers and --scheduler are mutually exclusive: --workers starts a local "
               "cluster, --scheduler uses a running one")
     if cluster is not None and (workers is not None or scheduler is not None):
-        _fail("--cluster is exclusive with --workers and --scheduler: it submits its own "
+        fail("--cluster is exclusive with --workers and --scheduler: it submits its own "
               "worker jobs")
     with _user_errors():
         if cluster is not None:

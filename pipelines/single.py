@@ -30,9 +30,9 @@ EXIT_USER_ERROR = 2
 
 
 def fail(message: str, status: int = EXIT_USER_ERROR) -> NoReturn:
-    """One ``error:`` line on stderr and the exit status (2: bad input)."""
+    """One ``error:`` line on stderr and the exit status (2: bad input), from any command."""
     click.echo(f"error: {' '.join(str(message).split())}", err=True)
-    raise SystemExit(status)
+    raise click.exceptions.Exit(status)
 
 
 def check_writable(out: Path | None, figures: Path | None = None) -> None:
