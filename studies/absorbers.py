@@ -12,7 +12,6 @@ models archive with the same names and units.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from functools import lru_cache
 
 import numpy as np
 from numpy.typing import NDArray
@@ -27,7 +26,7 @@ from studies.equivalent import (
     equivalent_pin_angles,
     particle_state,
 )
-from studies.holes import Geometry, Holes, design
+from studies.holes import Geometry, Holes, designed
 from studies.parameters import Output, Param, Parameters
 
 N_BIFILARS = 4
@@ -85,26 +84,10 @@ OUTPUTS: dict[str, Output] = {
 }
 
 
-def geometry(p: Parameters) -> Geometry:
-    """The bifilar hardware of a parameter set that declares :data:`PARAMETERS`."""
-    return Geometry(p.arm_radius, p.cm_offset, p.pin_diameter, p.tuning_mass, p.pin_mass,
-                    p.pin_inertia)
-
-
 def holes_for(p: Parameters) -> Holes:
     """Holes of the requested shape and tuning order (raises ParameterError if the geometry
-    admits none).
-
-    The same hardware gives the same holes: a sweep over anything else (the fuselage, the
-    shears, the time step) designs them once, and validating a parameter set (which designs
-    them to check the geometry) leaves them designed for its run."""
-    return _designed(p.hole, p.tuning_order, p.arm_radius, p.cm_offset, p.pin_diameter,
-                     p.tuning_mass, p.pin_mass, p.pin_inertia)
-
-
-@lru_cache(maxsize=64)
-def _designed(hole: str, tuning_order: float, *hardware: float) -> Holes:
-    return design(hole, Geometry(*hardware), tuning_order=tuning_order)
+    admits none), designed once per hardware (:func:`studies.holes.designed`)."""
+    return designed(p.hole, Geometry.of(p), tuning_order=p.tuning_order)
 
 
 def pin_damping(p: Parameters, holes: Holes) -> float:

@@ -27,8 +27,7 @@ remaining rotation (3 + 2 + 1 in-plane unknowns, 2 rolling relations: one degree
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import astuple, dataclass
-from functools import lru_cache
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -41,7 +40,7 @@ from solver.joints import Orientation, Revolute, Rigid
 from solver.model import Model
 from solver.rotations import rotation_about
 from solver.simulation import simulate as simulate_model
-from studies.holes import SHAPES, Geometry, Holes, design
+from studies.holes import SHAPES, Geometry, Holes, designed
 from studies.measure import period_from_crossings
 from studies.parameters import (
     RUN_OUTPUTS,
@@ -136,27 +135,14 @@ OUTPUTS: dict[str, Output] = {
 }
 
 
-def geometry(p: Parameters) -> Geometry:
-    """The bifilar hardware of a parameter set that declares :data:`HARDWARE`."""
-    return Geometry(p.arm_radius, p.cm_offset, p.pin_diameter, p.tuning_mass, p.pin_mass,
-                    p.pin_inertia)
-
-
 def holes_for(p: Parameters) -> Holes:
     """The pendulum's designed holes: of ``hole_diameter`` if given, else sized for
     ``tuning_order`` (raises ParameterError for impossible geometry). A pendulum case's
     derived design is its holes alone: its run and its validation share them
-    (:func:`_designed`)."""
+    (:func:`studies.holes.designed`)."""
     if p.hole_diameter > 0:
-        return _designed(p.hole, None, p.hole_diameter, *astuple(geometry(p)))
-    return _designed(p.hole, p.tuning_order, None, *astuple(geometry(p)))
-
-
-@lru_cache(maxsize=64)
-def _designed(hole: str, tuning_order: float | None, hole_diameter: float | None,
-              *hardware: float) -> Holes:
-    return design(hole, Geometry(*hardware), tuning_order=tuning_order,
-                  hole_diameter=hole_diameter)
+        return designed(p.hole, Geometry.of(p), hole_diameter=p.hole_diameter)
+    return designed(p.hole, Geometry.of(p), tuning_order=p.tuning_order)
 
 
 def check(p: Parameters) -> None:

@@ -26,7 +26,9 @@ including the pins; the design helper sizes ρ_v from Eq. (7) for a target order
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import astuple, dataclass
+from functools import lru_cache
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -50,6 +52,13 @@ class Geometry:
     tuning_mass: float
     pin_mass: float
     pin_inertia: float
+
+    @classmethod
+    def of(cls, p: Any) -> Geometry:
+        """The hardware of a parameter set that declares ``arm_radius``, ``cm_offset``,
+        ``pin_diameter``, ``tuning_mass``, ``pin_mass`` and ``pin_inertia``."""
+        return cls(p.arm_radius, p.cm_offset, p.pin_diameter, p.tuning_mass, p.pin_mass,
+                   p.pin_inertia)
 
     def order_circular(self, hole_diameter: float) -> float:
         """Eq. (7): small-amplitude tuning order of equal circular holes of diameter D."""
@@ -248,6 +257,21 @@ def _check_curvature(h: Holes) -> None:
             f"{h.shape} hole: its radius of curvature falls below the pin radius "
             f"({h.geometry.pin_diameter / 2:g} m) within ±{np.degrees(MAX_TANGENT_ANGLE):.0f}° "
             "of the vertex; use a smaller pin or a lower tuning order")
+
+
+def designed(shape: str, geometry: Geometry, tuning_order: float | None = None,
+             hole_diameter: float | None = None) -> Holes:
+    """:func:`design`, kept: the same inputs give the same holes object, so that a sweep over
+    anything but the hardware designs them once, and validating a parameter set (which
+    designs them to check the geometry) leaves them designed for its run."""
+    return _designed(shape, tuning_order, hole_diameter, astuple(geometry))
+
+
+@lru_cache(maxsize=64)
+def _designed(shape: str, tuning_order: float | None, hole_diameter: float | None,
+              hardware: tuple[float, ...]) -> Holes:
+    return design(shape, Geometry(*hardware), tuning_order=tuning_order,
+                  hole_diameter=hole_diameter)
 
 
 def design_from_control_points(points, geometry: Geometry, degree: int = 3,

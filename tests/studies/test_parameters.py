@@ -116,17 +116,17 @@ def test_optional_scalar_outputs_may_be_left_out():
 def test_hub_design_is_made_once_per_case_and_run_facts_are_declared(monkeypatch):
     """Validating a hub case designs its holes (the geometry check); the run takes them from
     there; the run facts are declared scalar outputs."""
-    from studies import absorbers, hub
+    from studies import holes, hub
 
     calls = []
-    design = absorbers.design
+    design = holes.design
 
     def counting(*args, **kw):
         calls.append(args[0])
         return design(*args, **kw)
 
-    monkeypatch.setattr(absorbers, "design", counting)
-    absorbers._designed.cache_clear()
+    monkeypatch.setattr(holes, "design", counting)
+    holes._designed.cache_clear()
     p = hub.SPEC.validate({"tuning_order": 3.1, "revolutions": 1, "richardson": False,
                            "error_estimate": False})
     ds = hub.SPEC.run(p.as_dict())
