@@ -60,6 +60,7 @@ import dask.config
 import numpy as np
 import xarray as xr
 
+from pipelines.checks import process_alive
 from studies.harmonics import (
     N_MAX,
     case_harmonics,
@@ -433,13 +434,7 @@ def _writer_alive(name: str, stem: str) -> bool:
         return True  # another machine's writer (a worker on a shared file system): unknown
     if pid == os.getpid():
         return False  # this process writes one file at a time: its own are leftovers
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    return True
+    return process_alive(pid)
 
 
 def stale_temporaries(directory: Path, stem: str, *, all_writers: bool = False) -> list[Path]:

@@ -196,3 +196,16 @@ def check_target_file(path: str | os.PathLike[str], option: str = "--out") -> Pa
         raise InputError(f"{option} {path.parent}: {path} is {kind}; the sweep writes its "
                          "archive there: move it away or choose another --out")
     return path
+
+
+def process_alive(pid: int) -> bool:
+    """Whether a process ``pid`` exists on this host (signal 0 checks without sending)."""
+    if pid <= 0:
+        return False
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # exists, owned by another user
+        return True
+    return True

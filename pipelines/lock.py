@@ -23,25 +23,12 @@ from collections.abc import Callable, Iterator
 from datetime import UTC, datetime
 from pathlib import Path
 
-from pipelines.checks import InputError
+from pipelines.checks import InputError, process_alive
 
 LOCK_NAME = "sweep.lock"
 # A lock file that is empty or unreadable is one being written right now, unless it is older
 # than this (s): then its writer died between creating and filling it.
 UNFINISHED_LOCK_AGE = 10.0
-
-
-def process_alive(pid: int) -> bool:
-    """Whether a process ``pid`` exists on this host (signal 0 checks without sending)."""
-    if pid <= 0:
-        return False
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:  # exists, owned by another user
-        return True
-    return True
 
 
 def _read(path: Path) -> dict[str, object] | None:
