@@ -88,6 +88,7 @@ class System:
         elements = [p for e in model.elements for p in (e, *e.parts())]
         self.elements = elements
         self.model = model
+        self._reaction_entries: dict[int, np.ndarray] = {}  # joint -> its Jacobian entries
         self.bodies = [e for e in elements if isinstance(e, BODY_TYPES)]
         names = [b.name for b in self.bodies]
         dup = {n for n in names if names.count(n) > 1}
@@ -500,11 +501,15 @@ class System:
 
     def reaction(self, joint, q: Array, lam: Array, t: float) -> tuple[Array, Array]:
         """Force (N) and moment about the joint point (N·m) the joint applies to body_b."""
-        rows = self.quad_set.rows[joint]
         quad = self.quad
-        gv = quad.jacobian_values(q, t)
-        mask = np.isin(quad.jac_rows, rows)
-        f = -np.bincount(quad.jac_cols[mask], gv[mask] * lam[quad.jac_rows[mask]],
+        # the Jacobian entries of the joint's rows, found once per joint (a sampler asks for
+        # the same joint's reaction at every step)
+        entries = self._reaction_entries.get(id(joint))
+        if entries is None:
+            entries = np.flatnonzero(np.isin(quad.jac_rows, self.quad_set.rows[joint]))
+            self._reaction_entries[id(joint)] = entries
+        gv = quad.jacobian_values(q, t)[entries]
+        f = -np.bincount(quad.jac_cols[entries], gv * lam[quad.jac_rows[entries]],
                          minlength=self.n)
         b = joint.body_b
         o = self.offset[b]
