@@ -1,0 +1,234 @@
+"""The rotor's prescribed vortex wake, iterated with its periodic response.
+
+With ``inflow = "prescribed_wake"`` the rotor's lifting lines see, instead of the Peters–He
+inflow states, the velocity induced at their sections by a prescribed tip-vortex wake
+(:class:`solver.vortex_wake.TipVortexWake`): each blade trails a tip vortex from
+``wake_release_radius`` along Beddoes' generalized wake (or a rigid skewed helix), of the
+strength of the blade's peak bound circulation when it was trailed, with a Vatistas core of
+``wake_core_radius`` tip chords; the other blades' bound vortices, of the same strength, are
+included. The wake is a lifting-line model's trailed vorticity; the shed wake of each section
+is the Peters finite-state airfoil's, as with Peters–He.
+
+The wake is not a state of the multibody model: it is a velocity per section and per azimuth
+(:class:`solver.section_wind.PeriodicWind`, one table for the four blades, each a quarter
+revolution behind the previous one, so that the model keeps its quarter-revolution symmetry),
+computed from the previous revolution of blade 0 — its sections' positions, its tip and its
+circulation at every time step — and updated with under-relaxation ``wake_relaxation``. The
+rotor starts with the wake of its mean thrust coefficient guess (uniform circulation), updates
+it after each settling revolution, then alternates shooting to the periodic response for the
+current wake and updating the wake, until the wake's induced velocity changes by less than
+``wake_tolerance`` of its largest value (the wake and the response are then a fixed point of
+each other).
+
+The wake's geometry needs the mean induced inflow (its descent through the disk): that of
+momentum theory (Glauert) for the thrust of the previous revolution.
+
+Assumptions: the wake is prescribed, not free (no self-induced distortion beyond Beddoes'
+descent law); the tip vortex carries the peak bound circulation (Betz's roll-up of a positively
+loaded blade: a negatively loaded advancing tip's counter-rotating vortex is not modelled); the
+circulation's change along a tip vortex stands for the shed vorticity that would join it
+(not modelled separately); no root vortex (it induces no flow through the disk); the core
+radius is constant with age.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+
+import numpy as np
+from numpy.typing import NDArray
+
+from solver.inflow import glauert_inflow
+from solver.section_wind import PeriodicWind
+from solver.vortex_wake import DESCENT_LAWS, TipVortexWake
+from studies.parameters import Param, Parameters
+from studies.uh60a import UH60A
+
+Array = NDArray[np.float64]
+INFLOW_MODELS = ("peters_he", "prescribed_wake")
+
+PARAMETERS: dict[str, Param] = {
+    "inflow": Param("peters_he", "1", "rotor inflow model: Peters–He finite states, or a "
+                    "prescribed tip-vortex wake iterated with the periodic response",
+                    choices=INFLOW_MODELS),
+    "wake_turns": Param(4.0, "1", "length of the prescribed wake, in revolutions of age",
+                        minimum=0.5, maximum=50.0),
+    "wake_segments_per_turn": Param(72, "1", "straight vortex segments per revolution of "
+                                    "wake age", minimum=12, maximum=1440),
+    "wake_core_radius": Param(0.25, "1", "Vatistas core radius of the tip vortices, in tip "
+                              "chords", minimum=0.01, maximum=5.0),
+    "wake_near_age": Param(30.0, "degree", "wake age below which a blade's own tip vortex "
+                           "is left out of the flow it sees (its near wake, still rolling up: "
+                           "the lifting line's tip loss stands for it)", minimum=0.0,
+                           maximum=180.0),
+    "wake_release_radius": Param(UH60A.tip_loss, "1", "radius the tip vortices leave the "
+                                 "blades at, on R (the tip-loss station: the circulation "
+                                 "drops to zero there)", minimum=0.5, maximum=1.0),
+    "wake_descent": Param("beddoes", "1", "descent law of the prescribed wake",
+                          choices=DESCENT_LAWS),
+    "wake_relaxation": Param(0.5, "1", "under-relaxation of the wake's updates (1: none)",
+                             minimum=0.05, maximum=1.0),
+    "wake_tolerance": Param(5e-3, "1", "largest change of the wake's induced velocity between "
+                            "iterations, relative to its largest value, for convergence",
+                            minimum=0.0, exclusive_minimum=True, maximum=0.5),
+    "wake_iterations": Param(15, "1", "wake updates allowed after settling", minimum=1,
+                             maximum=100),
+}
+
+# Below this chordwise speed (on ΩR) a section's circulation is not read from its lift
+# (reversed-flow region near the retreating root).
+MIN_SPEED_FRACTION = 0.05
+# Iterates Anderson's acceleration combines (RotorWake.update).
+ANDERSON_DEPTH = 5
+
+
+class RotorWake:
+    """The prescribed wake of a rotor case: its induced velocity table and the histories of
+    blade 0 it is computed from.
+
+    Parameters
+    ----------
+    p
+        The rotor's parameters (:data:`PARAMETERS` among them).
+    n_sections
+        Aerodynamic sections per blade.
+    blades
+        Number of blades Q; blade k trails a quarter (1/Q) revolution behind blade k − 1.
+    thrust_guess
+        Thrust coefficient C_T of the first wake (uniform circulation 2π C_T Ω R² / Q).
+    """
+
+    def __init__(self, p: Parameters, n_sections: int, blades: int,
+                 thrust_guess: float) -> None:
+        self.p = p
+        self.omega = p.hub_speed
+        self.n = p.steps_per_rev
+        self.blades = blades
+        self.period = 2.0 * math.pi / self.omega
+        self.table = np.zeros((self.n, n_sections, 3))
+        # blade k at time t is where blade 0 is at t + kT/Q
+        self.winds = [PeriodicWind(self.period, self.table, delay=k * self.period / blades)
+                      for k in range(blades)]
+        r = UH60A.radius
+        tilt = math.radians(p.shaft_tilt)
+        self.mu = p.flight_speed * math.cos(tilt) / (self.omega * r)
+        self.lam_f = p.flight_speed * math.sin(tilt) / (self.omega * r)
+        # blade 0's histories over its last revolution, by azimuth slot
+        self.points = np.zeros((self.n, n_sections, 3))
+        self.gamma = np.zeros(self.n)
+        self.tip = np.zeros((self.n, 3))
+        self.root = np.zeros((self.n, 3))
+        self.thrust = np.zeros(self.n)
+        self.filled = np.zeros(self.n, dtype=bool)
+        self.thrust_guess = thrust_guess
+        self.updates = 0
+        self.change = math.inf
+        self.history: list[tuple[Array, Array]] = []  # (x, G(x) − x) for Anderson
+
+    # ------------------------------------------------------------------ the wake
+    def wake(self, ct: float) -> TipVortexWake:
+        """The wake's geometry for the thrust coefficient ``ct``."""
+        lam0 = max(glauert_inflow(ct, self.mu, self.lam_f), 1e-4)
+        return TipVortexWake(UH60A.radius, self.blades, self.mu, self.lam_f, lam0,
+                             turns=self.p.wake_turns,
+                             segments_per_turn=self.p.wake_segments_per_turn,
+                             release_radius=self.p.wake_release_radius,
+                             descent=self.p.wake_descent)
+
+    @property
+    def core(self) -> float:
+        return self.p.wake_core_radius * UH60A.chord
+
+    def start(self, points: Array) -> None:
+        """The first wake: the blades' sections at ``points`` (n_sections, 3) turned with the
+        azimuth, a flat tip path and uniform circulation of the thrust guess."""
+        psi = 2.0 * math.pi * np.arange(self.n) / self.n
+        c, s = np.cos(psi), np.sin(psi)
+        rot = np.zeros((self.n, 3, 3))
+        rot[:, 0, 0], rot[:, 0, 1], rot[:, 1, 0], rot[:, 1, 1] = c, -s, s, c
+        rot[:, 2, 2] = 1.0
+        pts = np.einsum("jab,kb->jka", rot, points)
+        r = UH60A.radius
+        tip = self.p.wake_release_radius * r * np.stack([c, s, np.zeros_like(c)], axis=1)
+        gam = np.full(self.n, 2.0 * math.pi * self.thrust_guess * self.omega * r * r
+                      / self.blades)
+        self.points[:] = pts
+        self.table[:] = self._velocities(pts, gam, tip, pts[:, 0], self.thrust_guess)
+
+    def _velocities(self, points: Array, gamma: Array, tip: Array, root: Array,
+                    ct: float) -> Array:
+        bound = np.stack([root, tip], axis=1)
+        return self.wake(ct).blade_velocities(points, gamma, tip, bound, self.core,
+                                              math.radians(self.p.wake_near_age))
+
+    def record(self, t: float, air: dict[str, Array], tip: Array, thrust: float) -> None:
+        """Keep blade 0's sections, circulation and tip at the time step of ``t`` (s), from
+        the lifting lines' ``airloads`` (``line`` 0 is blade 0) and blade 0's tip node."""
+        j = round(t * self.omega / (2.0 * math.pi) * self.n) % self.n
+        sel = air["line"] == 0
+        u = air["u"][sel]
+        ok = np.abs(u) > MIN_SPEED_FRACTION * self.omega * UH60A.radius
+        gam = np.where(ok, air["lift"][sel] / (self.p.air_density * np.where(ok, u, 1.0)), 0.0)
+        pos = air["position"][sel]
+        self.points[j] = pos
+        self.gamma[j] = gam.max()
+        self.root[j] = pos[0]
+        self.tip[j] = self.p.wake_release_radius * tip
+        self.thrust[j] = thrust
+        self.filled[j] = True
+
+    def mean_inflow(self, t: float) -> float:
+        """The wake's induced inflow λ (on ΩR, down through the disk) at the blades' sections
+        at time ``t``, averaged over the disk (weights r ds, with r the sections' radius)."""
+        r = np.linalg.norm(self.points[:, :, :2], axis=2).mean(axis=0)
+        w = -sum(wind(t)[:, 2] for wind in self.winds) / self.blades
+        return float(np.sum(w * r) / np.sum(r)) / (self.omega * UH60A.radius)
+
+    def update(self, accelerate: bool = False) -> float:
+        """Recompute the wake from blade 0's last revolution and move the table towards it;
+        returns the change (relative to the table's largest value) before the move.
+
+        The move is the relaxed step x + β (G(x) − x), or with ``accelerate`` Anderson's
+        (type II, the last :data:`ANDERSON_DEPTH` iterates; Walker & Ni, SIAM J. Numer. Anal.
+        49, 2011): the residual's least-squares combination of the previous ones, which
+        removes the slow directions of the fixed-point map that relaxation alone crawls
+        along (one with a factor near 0.7 per update on the UH-60 case). Iterates taken
+        without it (settling, where the response is not yet periodic) are not remembered."""
+        if not self.filled.all():
+            raise RuntimeError("rotor wake: a whole revolution must be recorded before an "
+                               "update")
+        disk = math.pi * UH60A.radius**2
+        ct = float(self.thrust.mean()) / (self.p.air_density * disk
+                                          * (self.omega * UH60A.radius) ** 2)
+        new = self._velocities(self.points, self.gamma, self.tip, self.root, ct)
+        scale = max(float(np.abs(new).max()), 1e-12)
+        x, f = self.table.ravel().copy(), (new - self.table).ravel()
+        self.change = float(np.abs(f).max()) / scale
+        if not accelerate:
+            self.history.clear()
+        step = anderson_step(self.history, x, f, self.p.wake_relaxation,
+                             ANDERSON_DEPTH if accelerate else 0)
+        self.table += step.reshape(self.table.shape)
+        self.updates += 1
+        return self.change
+
+
+def anderson_step(history: list[tuple[Array, Array]], x: Array, f: Array, beta: float,
+                  depth: int) -> Array:
+    """The step from ``x`` of Anderson's mixing (type II) for the fixed point of G, given the
+    residual f = G(x) − x; ``history`` (the previous (x, f), updated here) keeps the last
+    ``depth`` + 1 pairs. With ΔX, ΔF the differences of successive iterates and residuals
+    and γ = argmin |f − ΔF γ|, the step is β f − (ΔX + β ΔF) γ; with ``depth`` 0 (or a
+    single pair) it is the relaxed step β f. On a linear map of dimension n with unlimited
+    depth it is GMRES's iterate, exact after n + 1 steps."""
+    if depth <= 0:
+        return beta * f
+    history.append((x, f))
+    del history[: -depth - 1]
+    if len(history) < 2:
+        return beta * f
+    dx = np.stack([b[0] - a[0] for a, b in itertools.pairwise(history)], axis=1)
+    df = np.stack([b[1] - a[1] for a, b in itertools.pairwise(history)], axis=1)
+    gamma = np.linalg.lstsq(df, f, rcond=1e-10)[0]
+    return beta * f - (dx + beta * df) @ gamma
