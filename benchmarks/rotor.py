@@ -1,15 +1,18 @@
 """Rotor benchmark: the UH-60 rotor model (studies/rotor.py) per revolution and per case.
 
     PYTHONPATH=. python benchmarks/rotor.py --revolutions 2 [--bifilar free] [--scheme ed]
-                                             [--profile]
+                                             [--inflow prescribed_wake] [--profile]
     PYTHONPATH=. python benchmarks/rotor.py --case [--bifilar free]     # one whole case
+    PYTHONPATH=. python benchmarks/rotor.py --wake-update               # one wake update
 
 The first form builds the model with its defaults (``--steps-per-rev`` to change them), marches
 ``--revolutions`` revolutions and prints the unknowns, the set-up time, the wall time per
 revolution, steps per second and Newton iterations per step; ``--profile`` runs the loop under
 pyinstrument and prints the profile (the modules that take the time). The second runs one case
 as the sweep does (settling, marching until periodic, recording) and prints its wall time,
-revolutions and Newton iterations per step.
+revolutions and Newton iterations per step (and, with the prescribed wake, its updates). The
+third times one update of the prescribed wake (Biot–Savart over the revolution's azimuths at
+blade 0's sections) at the model's wake parameters.
 """
 
 from __future__ import annotations
@@ -46,7 +49,8 @@ def per_revolution(p: Parameters, revolutions: int, profile: bool) -> dict:
     if profiler is not None:
         profiler.stop()
         print(profiler.output_text(unicode=True, color=False, show_all=False))
-    return {"bifilar": p.bifilar, "unknowns": system.n, "steps_per_rev": p.steps_per_rev,
+    return {"bifilar": p.bifilar, "inflow": p.inflow, "unknowns": system.n,
+            "steps_per_rev": p.steps_per_rev,
             "setup_s": round(setup, 2), "seconds_per_rev": round(loop / revolutions, 2),
             "steps_per_s": round(integ.n_steps / loop, 2),
             "newton_per_step": round(integ.n_iterations / integ.n_steps, 2)}
@@ -56,13 +60,26 @@ def per_case(p: Parameters) -> dict:
     t0 = time.perf_counter()
     ds = run(p)
     wall = time.perf_counter() - t0
-    revs = ds["run_transient_revolutions"].item() + ds["run_revolutions"].item()
-    return {"bifilar": p.bifilar, "wall_s": round(wall, 1), "revolutions": int(revs),
+    revs = ds["run_simulated_revolutions"].item()
+    return {"bifilar": p.bifilar, "inflow": p.inflow, "wall_s": round(wall, 1),
+            "revolutions": revs, "wake_updates": int(ds["run_wake_updates"].item()),
             "seconds_per_rev": round(wall / revs, 2),
             "newton_per_step": round(
                 ds["run_newton_iterations"].item() / ds["run_steps"].item(), 2),
             "thrust_coefficient_over_solidity": round(
                 ds["thrust_coefficient_over_solidity"].item(), 4)}
+
+
+def wake_update(p: Parameters) -> dict:
+    wake = build(p)[1].wake
+    wake.filled[:] = True  # the started wake's histories stand for a recorded revolution
+    wake.thrust[:] = 90e3
+    t0 = time.perf_counter()
+    wake.update()
+    seconds = time.perf_counter() - t0
+    segments = round(p.wake_turns * p.wake_segments_per_turn) * 4
+    return {"azimuths": p.steps_per_rev, "sections": wake.table.shape[1],
+            "segments": segments, "seconds_per_update": round(seconds, 3)}
 
 
 def main() -> None:
@@ -73,15 +90,23 @@ def main() -> None:
     a.add_argument("--scheme", default=None, choices=["galpha", "ed", "ep"],
                    help="time integration scheme (default: the model's, galpha)")
     a.add_argument("--profile", action="store_true")
+    a.add_argument("--inflow", default="peters_he", choices=["peters_he", "prescribed_wake"])
     a.add_argument("--case", action="store_true", help="run one whole case")
+    a.add_argument("--wake-update", action="store_true",
+                   help="time one update of the prescribed wake")
     args = a.parse_args()
-    given = {"bifilar": args.bifilar}
+    given = {"bifilar": args.bifilar, "inflow": args.inflow}
     if args.steps_per_rev:
         given["steps_per_rev"] = args.steps_per_rev
     if args.scheme:
         given["scheme"] = args.scheme
     p = SPEC.validate(given)
-    res = per_case(p) if args.case else per_revolution(p, args.revolutions, args.profile)
+    if args.wake_update:
+        res = wake_update(SPEC.validate({**given, "inflow": "prescribed_wake"}))
+    elif args.case:
+        res = per_case(p)
+    else:
+        res = per_revolution(p, args.revolutions, args.profile)
     print(json.dumps(res))
 
 

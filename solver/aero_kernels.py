@@ -72,7 +72,8 @@ def section_loads(x, xd, xa, mu, al, phi, wts, props, rho, vinf, omega_r, load_s
         (7,) the section's constants: b (m), cos(θ − α0), sin(θ − α0), ξ_qc (m), lift slope
         times the lifting flag (1/rad), c_d0, quadrature weight ds (m).
     rho, vinf
-        Air density (kg/m³) and free stream (3,) (m/s).
+        Air density (kg/m³) and the air's velocity at the section (3,) (m/s): the free
+        stream plus any prescribed wind (:mod:`solver.section_wind`).
     omega_r, load_scale
         ΩR (m/s) and 1/(ρΩ²R⁴) of the inflow (unused without inflow states).
     u_floor2
@@ -182,26 +183,28 @@ def section_loads(x, xd, xa, mu, al, phi, wts, props, rho, vinf, omega_r, load_s
 
 
 @njit(cache=True)
-def airloads(x, xd, xa, mu, al, phi, wts, props, rho, vinf, omega_r, load_scale, u_floor2,
+def airloads(x, xd, xa, mu, al, phi, wts, props, rho, air, omega_r, load_scale, u_floor2,
              kappa, pb, ainv_c, g, rates, forcing, det):
-    """:func:`section_loads` of every section k (real): inputs (K, ·), outputs g (K, 12),
+    """:func:`section_loads` of every section k (real): inputs (K, ·), the air's velocity at
+    each section ``air`` (K, 3) (free stream and any prescribed wind), outputs g (K, 12),
     rates (K, N), forcing (K, n_i), det (K, 19)."""
     wk = np.empty((_WORK, 3))
     for k in range(x.shape[0]):
-        section_loads(x[k], xd[k], xa[k], mu[k], al[k], phi[k], wts[k], props[k], rho, vinf,
+        section_loads(x[k], xd[k], xa[k], mu[k], al[k], phi[k], wts[k], props[k], rho, air[k],
                       omega_r, load_scale, u_floor2, kappa, pb, ainv_c, wk, g[k], rates[k],
                       forcing[k], det[k])
 
 
 @njit(cache=True)
-def local_jacobian(x, xd, xa, mu, al, phi, wts, phi_p, wts_p, props, rho, vinf, omega_r,
+def local_jacobian(x, xd, xa, mu, al, phi, wts, phi_p, wts_p, props, rho, air, omega_r,
                    load_scale, u_floor2, kappa, pb, ainv_c, h, jac):
     """∂(g, rates, forcing)/∂(x, μ, α, ẋ, ẍ) of every section by complex steps i h of
     :func:`section_loads`, one input at a time; the inflow states α enter only through the
     section's λ = Φ·α, so one step along Φ/(Φ·Φ) gives ∂/∂λ, and column j is ∂/∂λ Φ_j.
 
     ``phi_p``, ``wts_p`` (3, K, n_i, complex) are Φ and W at the positions perturbed by i h
-    along x, y, z (the only inputs they depend on). ``jac`` (K, 12 + N + n_i, 36 + N + n_i)
+    along x, y, z (the only inputs they depend on); ``air`` (K, 3) the air's velocity at
+    each section, as in :func:`airloads`. ``jac`` (K, 12 + N + n_i, 36 + N + n_i)
     receives the derivatives, columns in the order x (12), μ (N), α (n_i), ẋ (12), ẍ (12).
     """
     n, ni = mu.shape[1], al.shape[1]
@@ -233,7 +236,7 @@ def local_jacobian(x, xd, xa, mu, al, phi, wts, phi_p, wts_p, props, rho, vinf, 
                 if pp > 0.0:
                     for i in range(ni):
                         cal[i] = al[k, i] + step * (phi[k, i] / pp)
-                    section_loads(cx, cxd, cxa, cmu, cal, cph, cwt, props[k], rho, vinf,
+                    section_loads(cx, cxd, cxa, cmu, cal, cph, cwt, props[k], rho, air[k],
                                   omega_r, load_scale, u_floor2, kappa, pb, ainv_c, wk,
                                   out[:12], out[12 : 12 + n], out[12 + n :], det)
                     for i in range(ni):
@@ -253,7 +256,7 @@ def local_jacobian(x, xd, xa, mu, al, phi, wts, phi_p, wts_p, props, rho, vinf, 
                     ph, wt = phi_p[c, k], wts_p[c, k]
                 else:
                     ph, wt = cph, cwt
-                section_loads(cx, cxd, cxa, cmu, cal, ph, wt, props[k], rho, vinf, omega_r,
+                section_loads(cx, cxd, cxa, cmu, cal, ph, wt, props[k], rho, air[k], omega_r,
                               load_scale, u_floor2, kappa, pb, ainv_c, wk, out[:12],
                               out[12 : 12 + n], out[12 + n :], det)
                 arr[c] = base

@@ -580,22 +580,27 @@ class DynamicInflow(Element):
                            f"{f_load} (residual {np.linalg.norm(res):.3g})")
 
     def _glauert(self, ct: float) -> float:
-        """λ_m with C_T = 2 λ_m √(μ² + (λ_f + λ_m)²) (Glauert; a root of the same sign as
-        C_T, bracketed by doubling)."""
-        mu, lam_f = self.free_stream
-        if ct == 0.0:
-            return 0.0
+        """λ_m of :func:`glauert_inflow` in this inflow's free stream."""
+        return glauert_inflow(ct, *self.free_stream)
 
-        def g(lm: float) -> float:
-            return 2.0 * lm * math.hypot(mu, lam_f + lm) - ct
 
-        hi = math.copysign(math.sqrt(abs(ct) / 2.0), ct)
-        for _ in range(200):
-            if g(hi) * ct > 0.0:
-                return brentq(g, min(0.0, hi), max(0.0, hi), xtol=1e-300,
-                              rtol=4 * np.finfo(float).eps)
-            hi *= 2.0
-        return math.copysign(math.sqrt(abs(ct) / 2.0), ct)
+def glauert_inflow(ct: float, mu: float, lam_f: float) -> float:
+    """The momentum (Glauert) induced inflow λ_m with C_T = 2 λ_m √(μ² + (λ_f + λ_m)²), for
+    the in-plane free stream μ and the free stream λ_f down through the disk (all on ΩR): a
+    root of the same sign as C_T, bracketed by doubling."""
+    if ct == 0.0:
+        return 0.0
+
+    def g(lm: float) -> float:
+        return 2.0 * lm * math.hypot(mu, lam_f + lm) - ct
+
+    hi = math.copysign(math.sqrt(abs(ct) / 2.0), ct)
+    for _ in range(200):
+        if g(hi) * ct > 0.0:
+            return brentq(g, min(0.0, hi), max(0.0, hi), xtol=1e-300,
+                          rtol=4 * np.finfo(float).eps)
+        hi *= 2.0
+    return math.copysign(math.sqrt(abs(ct) / 2.0), ct)
 
 
 class DynamicInflowSet(ElementSet):

@@ -15,9 +15,11 @@ e_c = cos(θ − α0) d2 + sin(θ − α0) d3 (towards the leading edge), e_n = 
 cos(θ − α0) d3, e_s = d1. A chordwise point at ξ (m, towards the leading edge) from the
 reference line is P(ξ) = x + ξ e_c, with the quarter chord at ξ_qc (``quarter_chord``), the
 mid-chord at ξ_qc − b/2 and the three-quarter chord at ξ_qc − b (b = c/2, the semichord).
-The air velocity relative to P is W(ξ) = V∞ + v_i(x) − Ṗ(ξ), with V∞ the free stream
-(:class:`~solver.air.FlightCondition`) and v_i = −λ Ω R ẑ the induced velocity of the rotor
-inflow model at the section (:class:`~solver.inflow.DynamicInflow`, if given). Its chordwise
+The air velocity relative to P is W(ξ) = V∞ + v_w + v_i(x) − Ṗ(ξ), with V∞ the free stream
+(:class:`~solver.air.FlightCondition`), v_w a prescribed wind at the section (a function of
+time: :class:`~solver.section_wind.PeriodicWind`, e.g. a rotor's vortex wake, if given) and
+v_i = −λ Ω R ẑ the induced velocity of the rotor inflow model at the section
+(:class:`~solver.inflow.DynamicInflow`, if given). Its chordwise
 speed is u = −W(mid)·e_c and its normal components w(ξ) = W(ξ)·e_n: w0 at the mid-chord,
 w34 at the three-quarter chord, and w1 = b ė_c·e_n (b times the nose-up pitch rate), so that
 w(x) = w0 + w1 x/b along the chord (x aft of the mid-chord).
@@ -125,6 +127,10 @@ class LiftingLine(Element):
     inflow
         Rotor inflow model whose induced velocity the sections see and whose states they
         drive; ``None``: only the free stream.
+    wind
+        A prescribed velocity (m/s) at each section, a function of time (e.g.
+        :class:`~solver.section_wind.PeriodicWind`: called with t, returns (n_sections, 3)),
+        added to the free stream; ``None``: none.
     points
         Gauss points (sections) per segment, 1…8.
     start
@@ -145,6 +151,7 @@ class LiftingLine(Element):
     lift_end: float | None = None
     wake_states: int = DEFAULT_STATES
     inflow: object | None = None
+    wind: Callable[[float], Array] | None = None
     points: int = 4
     start: str = "steady"
     sections: dict = field(init=False, repr=False)
@@ -188,6 +195,11 @@ class LiftingLine(Element):
                                  f"{s1:.6g}] (the span)")
             cuts.append(le)
         self.sections = _quadrature(ends, np.array(cuts), s0, s1, self.points)
+        if self.wind is not None:
+            w = np.asarray(self.wind(0.0))
+            if w.shape != (self.n_sections, 3):
+                raise ValueError(f"{owner}: wind(t) gives shape {w.shape}, must be "
+                                 f"({self.n_sections}, 3) (one velocity per section)")
         s = self.sections["s"]
         for key, lo, hi, unit in (("chord", 1e-6, 100.0, "m"), ("lift_slope", 1e-9, 10.0, "1/rad"),
                                   ("zero_lift_angle", -0.2, 0.2, "rad"), ("drag", 0.0, 0.1, "1"),
@@ -321,6 +333,11 @@ class LiftingLineSet(ElementSet):
             ref = max(float(np.sqrt(self.vinf @ self.vinf)), 1.0)
         self.u_floor2 = (FLOOR_FRACTION * ref) ** 2
         self.vinf = np.ascontiguousarray(self.vinf, dtype=float)
+        # the air at each section: the free stream, plus the lines' prescribed winds
+        self.air_steady = np.ascontiguousarray(np.broadcast_to(self.vinf, (k, 3)))
+        first = np.cumsum([0] + [e.n_sections for e in elements])
+        self.winds = [(slice(first[j], first[j + 1]), e.wind)
+                      for j, e in enumerate(elements) if e.wind is not None]
         # the sections' constants in the compiled kernel's layout (aero_kernels.N_PROPS)
         self.props = np.ascontiguousarray(np.column_stack(
             [self.b, self.cos_t, self.sin_t, self.xq, self.a_lift, self.cd0, self.ds]))
@@ -344,7 +361,7 @@ class LiftingLineSet(ElementSet):
         if not self.n:
             return
         v0 = self.system.initial_velocity_guess()
-        out = self.airloads(q0, v0, np.zeros_like(q0))
+        out = self.airloads(q0, v0, np.zeros_like(q0), 0.0)
         for j, e in enumerate(self.elements):
             if e.start != "steady":
                 continue
@@ -369,37 +386,47 @@ class LiftingLineSet(ElementSet):
         phi = np.ascontiguousarray(self.inflow.shape(*self.inflow.disk_coordinates(pos)))
         return phi, phi * self.load_factors  # = inflow.load_weights, one shape evaluation
 
-    def _constants(self):
-        return (self.props, self.rho, self.vinf, self.omega_r, self.load_scale, self.u_floor2,
+    def air(self, t: float) -> Array:
+        """The air's velocity at each section at time ``t`` (K, 3) (m/s): the free stream plus
+        the lines' winds."""
+        if not self.winds:
+            return self.air_steady
+        out = self.air_steady.copy()
+        for sel, wind in self.winds:
+            out[sel] += wind(t)
+        return out
+
+    def _constants(self, t: float):
+        return (self.props, self.rho, self.air(t), self.omega_r, self.load_scale, self.u_floor2,
                 self.kappa, self.pb, self.ainv_c)
 
-    def _kernel(self, x, xd, xa, mu, al):
+    def _kernel(self, x, xd, xa, mu, al, t):
         """Airloads of every section (:func:`solver.aero_kernels.section_loads`) for their local
         coordinates x, rates xd, accelerations xa (K, 12), wake states mu (K, N) and inflow
         states al (K, n_i). Returns g (K, 12) the generalized force per unit span on (x, d1,
         d2, d3), the wake-state rates (K, N), the inflow forcing (K, n_i) and the details
-        (K, 19; :data:`solver.aero_kernels.DETAIL_COLUMNS`)."""
+        (K, 19; :data:`solver.aero_kernels.DETAIL_COLUMNS`), at time t (s)."""
         k = self.K
         phi, wts = self._inflow_terms(x[:, 0:3])
         g, det = np.empty((k, 12)), np.empty((k, aero_kernels.DETAILS))
         rates, forcing = np.empty((k, self.n)), np.empty((k, self.n_i))
-        aero_kernels.airloads(x, xd, xa, mu, al, phi, wts, *self._constants(), g, rates,
+        aero_kernels.airloads(x, xd, xa, mu, al, phi, wts, *self._constants(t), g, rates,
                               forcing, det)
         return g, rates, forcing, det
 
     # ------------------------------------------------------------------ terms
     def force(self, q, v, t, a):
-        g, rates, forcing, _ = self._kernel(*self._inputs(q, v, a))
+        g, rates, forcing, _ = self._kernel(*self._inputs(q, v, a), t)
         out = np.empty((self.K, 48 + self.n + self.n_i))
         aero_kernels.support_forces(g, self.ds, *self._nz, out)  # Sᵀ g ds per section
         out[:, 48 : 48 + self.n], out[:, 48 + self.n :] = rates, forcing
         return out.ravel()
 
-    def _local_jacobian(self, q, v, a):
+    def _local_jacobian(self, q, v, a, t):
         """∂(g, rates, forcing)/∂(x, μ, α | ẋ | ẍ) of every section by complex steps of the
         compiled section kernel, (K, 12 + n + ni, 36 + n + ni). Cached for the current
-        (q, v, a)."""
-        key = (q.tobytes(), v.tobytes(), a.tobytes())
+        (q, v, a, t)."""
+        key = (q.tobytes(), v.tobytes(), a.tobytes(), t if self.winds else None)
         if self._cache is not None and self._cache[0] == key:
             return self._cache[1]
         x, xd, xa, mu, al = self._inputs(q, v, a)
@@ -411,7 +438,7 @@ class LiftingLineSet(ElementSet):
             pos[c, :, c] += 1j * COMPLEX_STEP
         pp, wp = (z.reshape(3, k, ni) for z in self._inflow_terms(pos.reshape(3 * k, 3)))
         jac = np.empty((k, 12 + n + ni, 36 + n + ni))  # (K, out, in)
-        aero_kernels.local_jacobian(x, xd, xa, mu, al, phi, wts, pp, wp, *self._constants(),
+        aero_kernels.local_jacobian(x, xd, xa, mu, al, phi, wts, pp, wp, *self._constants(t),
                                     COMPLEX_STEP, jac)
         self._cache = (key, jac)
         return jac
@@ -425,14 +452,14 @@ class LiftingLineSet(ElementSet):
         return out
 
     def force_jacobians(self, q, v, t, a):
-        jac = self._local_jacobian(q, v, a)
+        jac = self._local_jacobian(q, v, a, t)
         n, ni = self.n, self.n_i
         dq = self._expand(jac, 0, n + ni)
         dv = self._expand(jac, 12 + n + ni, 0)
         return dq.ravel(), dv.ravel()
 
     def acceleration_jacobian(self, q, v, t, a):
-        jac = self._local_jacobian(q, v, a)
+        jac = self._local_jacobian(q, v, a, t)
         return self._expand(jac, 24 + self.n + self.n_i, 0).ravel()
 
     def force_tangent(self, q, v, t, a, wq, wv, wa):
@@ -444,18 +471,19 @@ class LiftingLineSet(ElementSet):
         wk = w48[:, 0]
         if not np.all(w48 == wk[:, None]):
             return None
-        jac = self._local_jacobian(q, v, a)
+        jac = self._local_jacobian(q, v, a, t)
         m = 12 + self.n + self.n_i  # columns by x, μ, α; then by ẋ (12) and ẍ (12)
         tan = wq * jac[:, :, :m]
         tan[:, :, :12] += wk[:, None, None] * jac[:, :, m : m + 12] + wa * jac[:, :, m + 12 :]
         return self._expand(tan, 0, self.n + self.n_i).ravel()
 
     # ------------------------------------------------------------------ outputs
-    def airloads(self, q: Array, v: Array, a: Array) -> dict[str, Array]:
-        """Per section: ``force`` (N/m, global, total), ``circulatory`` (N/m), ``lift``
-        (ρΓu, N/m), ``u``, ``w0``, ``w34``, ``lam0`` (m/s), ``apparent_lift`` (N/m),
-        ``apparent_moment`` (N·m/m), ``position`` (m), ``air`` (m/s), ``s``, ``ds`` (m)."""
-        *_, det = self._kernel(*self._inputs(q, v, a))
+    def airloads(self, q: Array, v: Array, a: Array, t: float = 0.0) -> dict[str, Array]:
+        """At time ``t`` (s; it matters only with a prescribed wind), per section: ``force``
+        (N/m, global, total), ``circulatory`` (N/m), ``lift`` (ρΓu, N/m), ``u``, ``w0``,
+        ``w34``, ``lam0`` (m/s), ``apparent_lift`` (N/m), ``apparent_moment`` (N·m/m),
+        ``position`` (m), ``air`` (m/s), ``s``, ``ds`` (m), ``line`` (the line's index)."""
+        *_, det = self._kernel(*self._inputs(q, v, a), t)
         out = {name: det[:, i] if w == 1 else det[:, i : i + w]
                for name, (i, w) in aero_kernels.DETAIL_COLUMNS.items()}
         out.update(s=self.s, ds=self.ds, line=self.line_of)

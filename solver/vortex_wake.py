@@ -26,7 +26,9 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
+
+from solver.vortex_kernels import induced_velocity
 
 Array = NDArray[np.float64]
 DESCENT_LAWS = ("rigid", "beddoes")
@@ -110,20 +112,33 @@ class TipVortexWake:
         inside = x <= np.sqrt(np.clip(1.0 - y * y, 0.0, None))
         return np.where(inside, lam0 * (1.0 + e * (x - ay3)), 2.0 * lam0 * (1.0 - e * ay3))
 
-    def filament(self, blade_azimuth: float) -> Array:
+    def filament(self, blade_azimuth: float, release: Array | None = None) -> Array:
         """Points (n + 1, 3) in metres of the tip vortex of a blade now at ``blade_azimuth``
         (rad), from the blade's tip (age 0) back along the wake; the descent is integrated
-        over the ages by the trapezoidal rule."""
+        over the ages by the trapezoidal rule.
+
+        ``release``: (n_ψ, 3) the point (m) a blade trails its tip vortex from, when at the
+        azimuths 2πj/n_ψ (a flapping, lagging blade's tip over a revolution, interpolated
+        linearly); the element of age φ left it at the blade's azimuth then, ψ_b − φ.
+        Default: the circle r_v R in the plane z = 0."""
         phi = self.ages()
-        rv, mu = self.release_radius, self.advance_ratio
-        x = rv * np.cos(blade_azimuth - phi) + mu * phi
-        y = rv * np.sin(blade_azimuth - phi)
+        mu = self.advance_ratio
+        if release is None:
+            rv = self.release_radius
+            x0, y0 = rv * np.cos(blade_azimuth - phi), rv * np.sin(blade_azimuth - phi)
+            z0 = np.zeros_like(phi)
+        else:
+            x0, y0, z0 = (periodic_interp(blade_azimuth - phi, release[:, c]) / self.radius
+                          for c in range(3))
+        x, y = x0 + mu * phi, y0
         rate = self.free_stream_inflow + self._induced(x, y)
-        z = -np.concatenate([[0.0], np.cumsum(0.5 * (rate[1:] + rate[:-1]) * np.diff(phi))])
+        z = z0 - np.concatenate([[0.0], np.cumsum(0.5 * (rate[1:] + rate[:-1]) * np.diff(phi))])
         return self.radius * np.stack([x, y, z], axis=1)
 
-    def segments(self, azimuth: float) -> tuple[Array, Array, Array]:
-        """Segments of every blade's tip vortex with blade 0 at ``azimuth`` (rad).
+    def segments(self, azimuth: float, release: Array | None = None
+                 ) -> tuple[Array, Array, Array]:
+        """Segments of every blade's tip vortex with blade 0 at ``azimuth`` (rad) (``release``
+        as in :meth:`filament`).
 
         Returns
         -------
@@ -131,14 +146,86 @@ class TipVortexWake:
             (m, 3) ends in metres, each segment from its younger end to its older one: the
             continuation of a bound vortex that runs from root to tip, so that a positive
             circulation is that of a blade lifting along +z; (m,) the age of each segment's
-            younger end (rad). (The root vortex, along the shaft, induces no flow through
-            the disk and is not included.)
+            midpoint (rad), blade 0's segments first. (The root vortex, along the shaft,
+            induces no flow through the disk and is not included.)
         """
         starts, ends, ages = [], [], []
         phi = self.ages()
         for k in range(self.blades):
-            pts = self.filament(azimuth + 2.0 * math.pi * k / self.blades)
+            pts = self.filament(azimuth + 2.0 * math.pi * k / self.blades, release)
             starts.append(pts[:-1])
             ends.append(pts[1:])
-            ages.append(phi[:-1])
+            ages.append(0.5 * (phi[:-1] + phi[1:]))
         return np.concatenate(starts), np.concatenate(ends), np.concatenate(ages)
+
+    def blade_velocities(self, points: Array, circulation: Array, release: Array,
+                         bound: Array | None = None, core: float = 0.0,
+                         near_age: float = 0.0) -> Array:
+        """Velocity the wake induces at blade 0's sections over a revolution, every blade
+        trailing as blade 0 does (a periodic response with the blades alike).
+
+        Parameters
+        ----------
+        points
+            (n_ψ, n_p, 3) the sections' positions (m) with blade 0 at azimuths 2πj/n_ψ.
+        circulation
+            (n_ψ,) a blade's tip-vortex circulation Γ_v (m²/s) at those azimuths: each wake
+            segment carries the value of its blade when it was trailed (at its midpoint's
+            age).
+        release
+            (n_ψ, 3) the tip vortex's release point (m) at those azimuths (:meth:`filament`).
+        bound
+            (n_ψ, 2, 3) the bound vortex's inner and outer ends (m) at those azimuths: the
+            other blades' bound vortices, of circulation Γ_v, induce flow at blade 0 too (its
+            own, on its sections' line, is left out); ``None``: not included.
+        core
+            Vatistas core radius r_c (m) of the tip vortices.
+        near_age
+            Wake age (rad) below which blade 0's own tip vortex is left out: its near wake,
+            a trailed sheet still rolling up, which a lifting line's tip loss stands for (a
+            concentrated vortex there, beside the outboard sections, would set their loads
+            by its distance to the nearest quadrature point).
+
+        Returns
+        -------
+        (n_ψ, n_p, 3) velocities (m/s) at the sections' positions.
+        """
+        n_psi = len(circulation)
+        shape_ok = (points.ndim == 3 and points.shape[0] == n_psi and points.shape[2] == 3
+                    and release.shape == (n_psi, 3)
+                    and (bound is None or bound.shape == (n_psi, 2, 3)))
+        if not shape_ok:
+            raise ValueError(f"wake: points {points.shape}, circulation {circulation.shape}, "
+                             f"release {release.shape} and bound "
+                             f"{None if bound is None else bound.shape} must be (n, p, 3), "
+                             "(n,), (n, 3) and (n, 2, 3)")
+        if n_psi % self.blades:
+            raise ValueError(f"wake: {n_psi} azimuths must be a multiple of the {self.blades} "
+                             "blades (the blades sit on the grid)")
+        out = np.empty_like(points)
+        step = n_psi // self.blades
+        for j in range(n_psi):
+            psi = 2.0 * math.pi * j / n_psi
+            a, b, age = self.segments(psi, release)
+            blade = np.repeat(np.arange(self.blades), len(age) // self.blades)
+            gam = periodic_interp(psi + 2.0 * math.pi * blade / self.blades - age, circulation)
+            gam[(blade == 0) & (age < near_age)] = 0.0
+            rc = np.full(len(gam), core)
+            if bound is not None and self.blades > 1:
+                others = [(j + k * step) % n_psi for k in range(1, self.blades)]
+                a = np.concatenate([a, bound[others, 0]])
+                b = np.concatenate([b, bound[others, 1]])
+                gam = np.concatenate([gam, circulation[others]])
+                rc = np.concatenate([rc, np.full(len(others), core)])
+            out[j] = induced_velocity(points[j], a, b, gam, rc)
+        return out
+
+
+def periodic_interp(angle: ArrayLike, samples: Array) -> Array:
+    """Samples of a 2π-periodic function at 2πj/n, interpolated linearly at ``angle`` (rad)."""
+    n = len(samples)
+    x = np.mod(np.asarray(angle, dtype=float) / (2.0 * math.pi), 1.0) * n
+    j = np.floor(x).astype(np.int64)
+    f = x - j
+    j %= n
+    return (1.0 - f) * samples[j] + f * samples[(j + 1) % n]

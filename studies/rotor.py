@@ -74,12 +74,13 @@ from solver.joints import Revolute, Rigid
 from solver.lifting_line import LiftingLine
 from solver.model import Model
 from solver.rotations import rotation_about
+from solver.section_wind import PeriodicWind
 from solver.sections import isotropic_section
 from solver.symmetry import CyclicSymmetry
 from solver.system import System
 from solver.timefunctions import TimeFunction, linear
 from solver.turning import TurningParts
-from studies import periodic
+from studies import periodic, rotor_wake
 from studies.absorbers import N_BIFILARS, AbsorberProbe, add_absorbers, holes_for, pin_damping
 from studies.absorbers import OUTPUTS as ABSORBER_OUTPUTS
 from studies.absorbers import PARAMETERS as ABSORBERS
@@ -89,6 +90,7 @@ from studies.holes import Holes
 from studies.parameters import ModelSpec, Output, Param, ParameterError, Parameters
 from studies.periodic import march, shoot, stepper, to_rotating
 from studies.progress import report
+from studies.rotor_wake import RotorWake
 from studies.uh60a import (
     UH60A,
     blade_airstations,
@@ -151,6 +153,7 @@ PARAMETERS: dict[str, Param] = {
                          minimum=1, maximum=8),
     "inflow_harmonics": Param(2, "1", "highest harmonic M of the Peters–He inflow (power P = "
                               "M + 1)", minimum=1, maximum=8),
+    **rotor_wake.PARAMETERS,
     "hub_mass": Param(250.0, "kg", "hub mass (the rotor's 716 kg less 4 blades)",
                       minimum=1.0, maximum=1e4),
     "hub_tilt_inertia": Param(50.0, "kg m2", "hub moment of inertia about in-plane axes",
@@ -201,6 +204,9 @@ FUSELAGE_GA = 1.0e9  # N
 FUSELAGE_GJ = 2.0e7  # N m2
 FUSELAGE_MASS = 10.0  # kg/m
 FUSELAGE_ELEMENTS = 2
+# First guess of the thrust coefficient: the Peters–He states and the prescribed wake start
+# near the rotor's level with it.
+THRUST_GUESS = 0.007
 
 # The absorbers' hub-level outputs (studies.absorbers), and the rotor's own.
 OUTPUTS: dict[str, Output] = {
@@ -213,7 +219,8 @@ OUTPUTS: dict[str, Output] = {
                                       history=True, figure="fuselage_moments"),
     "thrust": Output("N", "rotor thrust (aerodynamic, along the shaft)", history=True,
                      harmonics=True),
-    "mean_inflow": Output("1", "mean induced inflow ratio λ0 of the Peters–He states",
+    "mean_inflow": Output("1", "mean induced inflow ratio λ0: of the Peters–He states, or of "
+                          "the prescribed wake at the blades' sections (weights r ds)",
                           history=True),
     "blade_root_shear_flap": Output("N", "blade 0 root shear, flapwise (section d3)",
                                     history=True, harmonics=True),
@@ -235,6 +242,10 @@ OUTPUTS: dict[str, Output] = {
     "fuselage_damping": Output("N s m-1", "in-plane damper at the shaft head", dims=()),
     **periodic.RUN_OUTPUTS,
     "run_unknowns": Output("1", "unknowns of the multibody model", dims=()),
+    "run_wake_updates": Output("1", "updates of the prescribed wake (0 with Peters–He)",
+                               dims=()),
+    "run_wake_change": Output("1", "last change of the prescribed wake's induced velocity, "
+                              "relative to its largest value (0 with Peters–He)", dims=()),
 }
 
 
@@ -271,11 +282,12 @@ class RotorParts:
     fuselage: Beam
     blades: list[Beam]
     lines: list[LiftingLine]
-    inflow: DynamicInflow
+    inflow: DynamicInflow | None
     absorbers: list[BifilarParts] | EquivalentParts
     holes: Holes
     fuselage_stiffness: float
     fuselage_damping: float
+    wake: RotorWake | None = None
 
 
 def lag_feedback_gains(p: Parameters) -> tuple[float, float, float]:
@@ -342,10 +354,10 @@ def add_blade(model: Model, hub, k: int, p: Parameters, damping_factor: float = 
 
 
 def airloads(blade: Beam, k: int, p: Parameters, flight: FlightCondition,
-             inflow: DynamicInflow | None) -> LiftingLine:
+             inflow: DynamicInflow | None, wind: PeriodicWind | None = None) -> LiftingLine:
     """The lifting line of blade ``k``: the deck's chord and aero twist (relative to the
     beam's structural twist), lift slope, profile drag, tip loss, from the first airstation
-    to the tip."""
+    to the tip; the induced flow of ``inflow`` or the prescribed ``wind`` (a vortex wake)."""
     e = section_origin(include_cuff=True)
     r_tw, tw_s = blade_twist("structural")
     r_ta, tw_a = blade_twist("aero")
@@ -361,7 +373,8 @@ def airloads(blade: Beam, k: int, p: Parameters, flight: FlightCondition,
                        span=(r_as[0] - e, UH60A.radius - e), lift_slope=UH60A.lift_slope,
                        drag=UH60A.cd0, pitch=aero_pitch,
                        lift_end=UH60A.tip_loss * UH60A.radius - e,
-                       wake_states=p.wake_states, inflow=inflow, points=p.aero_points)
+                       wake_states=p.wake_states, inflow=inflow, wind=wind,
+                       points=p.aero_points)
 
 
 @dataclass(frozen=True)
@@ -417,10 +430,12 @@ def design(p: Parameters) -> RotorDesign:
 
 
 def build(p: Parameters, d: RotorDesign | None = None, damping_factor: float = 1.0,
-          feedback: bool = False) -> tuple[Model, RotorParts]:
+          feedback: bool = False, wake: RotorWake | None = None) -> tuple[Model, RotorParts]:
     """The rotor model for parameters ``p`` and their derived design ``d`` (default
     :func:`design`'s); ``damping_factor`` multiplies the lag and fuselage dampers (settling
-    phase), ``feedback`` adds the delayed lag feedback (marching to the periodic response)."""
+    phase), ``feedback`` adds the delayed lag feedback (marching to the periodic response).
+    With ``inflow = "prescribed_wake"`` the blades see ``wake``'s winds (a new
+    :class:`~studies.rotor_wake.RotorWake` if none is given) instead of Peters–He states."""
     omega = p.hub_speed
     d = design(p) if d is None else d
     holes = d.holes
@@ -452,20 +467,36 @@ def build(p: Parameters, d: RotorDesign | None = None, damping_factor: float = 1
     flight = FlightCondition(p.flight_speed, math.radians(p.shaft_tilt),
                              p.air_density)
     m = p.inflow_harmonics
-    # a first guess of the thrust coefficient starts the inflow near its level
-    inflow = DynamicInflow("inflow", flight, UH60A.radius, omega, model="peters-he",
-                           harmonics=m, power=m + 1, initial_thrust=0.007)
-    model.add(inflow)
+    inflow = None
+    if p.inflow == "peters_he":
+        # a first guess of the thrust coefficient starts the inflow near its level
+        inflow = DynamicInflow("inflow", flight, UH60A.radius, omega, model="peters-he",
+                               harmonics=m, power=m + 1, initial_thrust=THRUST_GUESS)
+        model.add(inflow)
+        wake = None
     blades, lines = [], []
     for k in range(N_BLADES):
         blade, _ = add_blade(model, hub, k, p, damping_factor,
                              d.lag_feedback if feedback else None)
-        lines.append(model.add(airloads(blade, k, p, flight, inflow)))
+        if inflow is None and wake is None:
+            wake = new_wake(p, airloads(blade, k, p, flight, None))
+        wind = None if wake is None else wake.winds[k]
+        lines.append(model.add(airloads(blade, k, p, flight, inflow, wind)))
         blades.append(blade)
     # ---- bifilars (or their equivalent, whose particle rides on the shaft head)
     absorbers = add_absorbers(model, hub, shaft, holes, p, d.pin_damping)
     return model, RotorParts(hub, shaft, fus, blades, lines, inflow, absorbers, holes,
-                             d.fuselage_stiffness, c_fus)
+                             d.fuselage_stiffness, c_fus, wake)
+
+
+def new_wake(p: Parameters, line: LiftingLine) -> RotorWake:
+    """The prescribed wake of a case, started from ``line``'s sections (blade 0's, built at
+    ψ = 0 along +x) with uniform circulation of :data:`THRUST_GUESS`."""
+    wake = RotorWake(p, line.n_sections, N_BLADES, THRUST_GUESS)
+    s = line.sections["s"]
+    e = section_origin(include_cuff=True)
+    wake.start(np.column_stack([e + s, np.zeros_like(s), np.zeros_like(s)]))
+    return wake
 
 
 def _line_set(system: System, line: LiftingLine):
@@ -490,7 +521,8 @@ class _Sampler:
                           if getattr(j, "name", None) == "pitch0")
         self.o_blade_root = system.offset[parts.blades[0].root]
         self.o_shaft = system.offset[parts.shaft]
-        self.o_inflow = system.offset[parts.inflow]
+        self.o_inflow = None if parts.inflow is None else system.offset[parts.inflow]
+        self.o_blade_tip = system.offset[parts.blades[0].tip]
         self.absorbers = AbsorberProbe(system, parts.absorbers, parts.hub)
         self.o_top = system.offset[parts.fuselage.tip]
 
@@ -504,10 +536,15 @@ class _Sampler:
         m11, m22 = loads[0, 4], loads[0, 5]
         cm, phis = self.absorbers(q, integ.t)
         acc = getattr(integ, "qdd", None)
-        air = self.line_set.airloads(q, v, np.zeros_like(q) if acc is None else acc)
+        air = self.line_set.airloads(q, v, np.zeros_like(q) if acc is None else acc, integ.t)
         thrust = float(np.sum(air["force"][:, 2] * air["ds"]))
-        lam0 = parts.inflow.mean_inflow(q[self.o_inflow : self.o_inflow
-                                          + parts.inflow.n_states])
+        if parts.wake is not None:  # keep blade 0's revolution for the wake's next update
+            o = self.o_blade_tip
+            parts.wake.record(integ.t, air, q[o : o + 3], thrust)
+            lam0 = parts.wake.mean_inflow(integ.t)
+        else:
+            lam0 = parts.inflow.mean_inflow(q[self.o_inflow : self.o_inflow
+                                              + parts.inflow.n_states])
         # the bearing's force and moment on the blade, in the root section's axes (d1, d2,
         # d3); the section's stress resultant is their opposite
         force, moment = s.reaction(self.pitch, q, integ.lam, integ.t)
@@ -557,24 +594,31 @@ def integrator(system: System, p: Parameters, h: float, parts: RotorParts | None
                            book_work=book_work, turning=spin, tolerance_scale=scale)
 
 
-def _settle(p: Parameters, d: RotorDesign, h: float) -> tuple[dict[str, Any], int, int]:
+def _settle(p: Parameters, d: RotorDesign, h: float, wake: RotorWake | None
+            ) -> tuple[dict[str, Any], int, int]:
     """March ``settle_revolutions`` with the lag and fuselage dampers multiplied by a factor
     that falls geometrically from ``settle_damping_factor`` towards 1, one value per
     revolution (each step down changes the forced response a little, so the transient it
-    starts is small); returns (integrator state to continue from, steps, Newton
-    iterations)."""
+    starts is small), updating the prescribed ``wake`` (if any) after each; returns
+    (integrator state to continue from, steps, Newton iterations)."""
     n, big = p.settle_revolutions, p.settle_damping_factor
     state = None
     steps = iterations = 0
     for rev in range(n):
         factor = big ** (1.0 - rev / n)
-        model, parts = build(p, d, damping_factor=factor)
-        integ = integrator(System(model), p, h, parts)
+        model, parts = build(p, d, damping_factor=factor, wake=wake)
+        system = System(model)
+        integ = integrator(system, p, h, parts)
         if state is not None:
             integ.restore(state)
         step = stepper(integ, p.hub_speed)
+        sample = _Sampler(system, parts) if wake is not None else None
         for _ in range(p.steps_per_rev):
             step()
+            if sample is not None:
+                sample(integ)
+        if wake is not None:
+            report(f"wake update {wake.updates + 1}: change {wake.update():.3g}")
         state = integ.state()
         steps += integ.n_steps
         iterations += integ.n_iterations
@@ -598,13 +642,15 @@ def simulate(p: Parameters) -> xr.Dataset:
     t0 = time.perf_counter()
     steps = iterations = 0
     settled = None
+    # the prescribed wake (if any), shared by every model built below
+    wake = build(p, d)[1].wake
     if p.settle_revolutions and p.settle_damping_factor != 1.0:
-        settled, steps, iterations = _settle(p, d, h)
+        settled, steps, iterations = _settle(p, d, h, wake)
     # a restart cannot carry the delay line of the lag feedback: shooting replaces it
     feedback = p.lag_feedback > 0 and not p.shooting_window
 
     def start(with_feedback: bool, state: dict[str, Any] | None):
-        model, parts = build(p, d, feedback=with_feedback)
+        model, parts = build(p, d, feedback=with_feedback, wake=wake)
         system = System(model)
         integ = integrator(system, p, h, parts)
         if state is not None:  # the same layout: continue exactly
@@ -640,19 +686,36 @@ def simulate(p: Parameters) -> xr.Dataset:
                                 np.roll(block[:, len(_Sampler.COLUMNS):], j, axis=1)])
 
     hint = "raise max_revolutions, settle_revolutions or pin_damping_ratio"
-    if p.shooting_window:
-        rec = shoot(integ, lambda: sampler(integ), signals, observe=observe,
-                    symmetry=symmetry(system, parts), system=system, steps_per_rev=nrev,
-                    revolutions=p.revolutions, max_revolutions=p.max_revolutions,
-                    tolerance=p.periodic_tolerance, groups=groups, separate_mean=True,
-                    window=p.shooting_window, max_restarts=p.shooting_restarts,
-                    hint=hint)
-    else:
-        rec = march(step, lambda: sampler(integ), signals, steps_per_rev=nrev,
-                    revolutions=p.revolutions, max_revolutions=p.max_revolutions,
-                    tolerance=p.periodic_tolerance, groups=groups, separate_mean=True,
-                    hint=hint, window=p.extrapolation_window,
-                    before_recording=remove_feedback if feedback else None)
+
+    def periodic_response() -> periodic.PeriodicRecord:
+        if p.shooting_window:
+            return shoot(integ, lambda: sampler(integ), signals, observe=observe,
+                         symmetry=symmetry(system, parts), system=system, steps_per_rev=nrev,
+                         revolutions=p.revolutions, max_revolutions=p.max_revolutions,
+                         tolerance=p.periodic_tolerance, groups=groups, separate_mean=True,
+                         window=p.shooting_window, max_restarts=p.shooting_restarts,
+                         hint=hint)
+        return march(step, lambda: sampler(integ), signals, steps_per_rev=nrev,
+                     revolutions=p.revolutions, max_revolutions=p.max_revolutions,
+                     tolerance=p.periodic_tolerance, groups=groups, separate_mean=True,
+                     hint=hint, window=p.extrapolation_window,
+                     before_recording=remove_feedback if feedback and not done else None)
+
+    rec = periodic_response()
+    transient = rec.transient
+    if wake is not None:
+        # the wake and the response, each the fixed point of the other: update the wake from
+        # the recorded revolution and find the periodic response again, until it settles
+        while wake.update(accelerate=True) > p.wake_tolerance:
+            if wake.updates - p.settle_revolutions >= p.wake_iterations:
+                raise RuntimeError(
+                    f"the prescribed wake did not converge in {p.wake_iterations} updates "
+                    f"after settling: its induced velocity still changes by "
+                    f"{wake.change:.3g} of its largest value (wake_tolerance = "
+                    f"{p.wake_tolerance:g}); raise wake_iterations or lower wake_relaxation")
+            report(f"wake update {wake.updates}: change {wake.change:.3g}")
+            transient += rec.transient + p.revolutions
+            rec = periodic_response()
     for i in [*done, integ]:
         steps += i.n_steps
         iterations += i.n_iterations
@@ -688,7 +751,7 @@ def simulate(p: Parameters) -> xr.Dataset:
     facts = {
         **periodic.run_facts(
             rec, hub_speed=omega, revolutions=p.revolutions, samples_per_rev=nrev,
-            transient=rec.transient + p.settle_revolutions, simulated=steps / nrev,
+            transient=transient + p.settle_revolutions, simulated=steps / nrev,
             steps=steps, iterations=iterations, seconds=time.perf_counter() - t0),
         "run_unknowns": np.int32(system.n),
         "tuning_order_linear": np.float64(d.holes.order_linear),
@@ -698,6 +761,8 @@ def simulate(p: Parameters) -> xr.Dataset:
         "advance_ratio": np.float64(p.flight_speed / (omega * UH60A.radius)),
         "effective_fuselage_stiffness": np.float64(parts.fuselage_stiffness),
         "fuselage_damping": np.float64(parts.fuselage_damping),
+        "run_wake_updates": np.int32(0 if wake is None else wake.updates),
+        "run_wake_change": np.float64(0.0 if wake is None else wake.change),
     }
     ds = SPEC.dataset({**series, **facts}, {"message": rec.note})
     return ds

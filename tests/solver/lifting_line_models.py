@@ -3,10 +3,13 @@
 * :func:`rotor` — rigid blades in prescribed spin with lifting lines and a dynamic inflow.
 * :func:`hover_closed_form` — that rotor's hover inflow and thrust in closed form.
 * :func:`wing_beam` — a straight elastic beam to carry a lifting line.
-* :func:`beam_line` — a twisted beam line in forward flight with a Peters–He inflow.
+* :func:`beam_line` — a twisted beam line in forward flight with a Peters–He inflow (and a
+  prescribed periodic wind).
 """
 
 from __future__ import annotations
+
+import dataclasses
 
 import numpy as np
 from scipy.optimize import brentq
@@ -18,6 +21,7 @@ from solver.inflow import DynamicInflow
 from solver.lifting_line import LiftingLine
 from solver.model import Model
 from solver.rotations import rotation_about
+from solver.section_wind import PeriodicWind
 from solver.sections import isotropic_section
 
 RHO = 1.225  # air density, kg/m³
@@ -68,8 +72,9 @@ def wing_beam(n_el=2, length=2.0):
                          e3=(0, 0, 1))
 
 
-def beam_line(zero_lift_angle: float = 0.0) -> tuple[Model, LiftingLine]:
-    """A twisted two-element beam line in forward flight with a Peters–He inflow."""
+def beam_line(zero_lift_angle: float = 0.0, wind: bool = False) -> tuple[Model, LiftingLine]:
+    """A twisted two-element beam line in forward flight with a Peters–He inflow; with
+    ``wind``, also a prescribed periodic wind of a few m/s at the sections (random samples)."""
     flight = FlightCondition(40.0, 0.05, RHO)
     beam = wing_beam(n_el=2, length=4.0)
     inflow = DynamicInflow("inflow", flight, 4.0, 20.0, model="peters-he", harmonics=2,
@@ -78,6 +83,9 @@ def beam_line(zero_lift_angle: float = 0.0) -> tuple[Model, LiftingLine]:
                        quarter_chord=0.02, drag=0.01, lift_slope=5.7, wake_states=4,
                        inflow=inflow, span=(0.5, 4.0), lift_end=3.8, points=3,
                        zero_lift_angle=zero_lift_angle)
+    if wind:
+        table = 3.0 * np.random.default_rng(5).standard_normal((16, line.n_sections, 3))
+        line = dataclasses.replace(line, wind=PeriodicWind(0.3, table, delay=0.02))
     model = Model()
     model.add(beam, inflow, line)
     return model, line

@@ -3,8 +3,9 @@
 The reference is a vectorized NumPy transcription of the section formulas of
 :mod:`solver.lifting_line` (all sections at once, dense 12 × 48 support maps S, the inflow's own
 ``shape`` and ``load_weights``), run on real and on complex inputs. Checked, on a twisted beam
-line in forward flight with a Peters–He inflow (drag, quarter-chord offset, tip loss), on body
-lines with the Pitt–Peters inflow, and on quasi-steady sections (no wake states):
+line in forward flight with a Peters–He inflow (drag, quarter-chord offset, tip loss), the same
+with a prescribed periodic wind at the sections, on body lines with the Pitt–Peters inflow, and
+on quasi-steady sections (no wake states):
 
 * the forces, the wake-state rates, the inflow forcing and every ``airloads`` output;
 * the local Jacobian (compiled complex steps, one input at a time, the inflow shapes taken at
@@ -29,10 +30,12 @@ from solver.system import System
 from tests.solver.lifting_line_models import RHO, beam_line, rotor
 
 TOL = 1e-13
+T = 0.137  # s: the time the kernels are called at (a prescribed wind between its samples)
 
 
 MODELS = {
     "beam, peters-he": lambda: beam_line(zero_lift_angle=-0.03)[0],
+    "beam, peters-he, wind": lambda: beam_line(zero_lift_angle=-0.03, wind=True)[0],
     "bodies, pitt-peters": lambda: rotor(np.radians(8.0), flight=FlightCondition(20.0, 0.05,
                                                                                 RHO))[0],
     "bodies, quasi-steady": lambda: rotor(np.radians(8.0), n=0)[0],
@@ -56,7 +59,7 @@ def reference(st: LiftingLineSet, x, xd, xa, mu, al) -> dict:
     dec = ct[:, None] * dd2 + st_[:, None] * dd3
     den = -st_[:, None] * dd2 + ct[:, None] * dd3
     aec = ct[:, None] * ad2 + st_[:, None] * ad3
-    vair = np.broadcast_to(st.vinf, pos.shape).astype(pos.dtype)
+    vair = st.air(T).astype(pos.dtype)  # the free stream and the wind at each section
     if st.n_i:
         xi, eta = st.inflow.disk_coordinates(pos)
         lam = dot(st.inflow.shape(xi, eta), al)
@@ -133,8 +136,8 @@ def test_forces_and_airloads_match_the_numpy_formulas(case):
     ref = reference(st, *local_inputs(st, q, v, a))
     fs = (ref["g"] * st.ds[:, None])[:, None, :] @ st.S  # Sᵀ g ds
     expect = np.concatenate([fs[:, 0], ref["rates"], ref["forcing"]], axis=1).ravel()
-    assert relerr(st.force(q, v, 0.0, a), expect) < TOL
-    out = st.airloads(q, v, a)
+    assert relerr(st.force(q, v, T, a), expect) < TOL
+    out = st.airloads(q, v, a, T)
     for key in ("force", "circulatory", "u", "w0", "w34", "lam0", "lift", "apparent_lift",
                 "apparent_moment", "position", "air"):
         assert relerr(out[key], np.broadcast_to(ref[key], out[key].shape)) < TOL, key
@@ -144,7 +147,7 @@ def test_local_jacobian_matches_complex_steps_of_the_numpy_formulas(case):
     st, q, v, a = case
     x, xd, xa, mu, al = local_inputs(st, q, v, a)
     st._cache = None
-    jac = st._local_jacobian(q, v, a)
+    jac = st._local_jacobian(q, v, a, T)
     # columns: x (12), μ (N), α (n_i), ẋ (12), ẍ (12)
     cols = ([(0, c) for c in range(12)] + [(3, c) for c in range(st.n)]
             + [(4, c) for c in range(st.n_i)] + [(1, c) for c in range(12)]
@@ -162,7 +165,7 @@ def test_local_jacobian_matches_complex_steps_of_the_numpy_formulas(case):
 def test_global_jacobian_blocks_are_the_dense_products(case):
     st, q, v, a = case
     st._cache = None
-    jac = st._local_jacobian(q, v, a)
+    jac = st._local_jacobian(q, v, a, T)
     n, ni = st.n, st.n_i
     st_t = np.swapaxes(st.S, 1, 2)
 
@@ -173,10 +176,10 @@ def test_global_jacobian_blocks_are_the_dense_products(case):
     dq = np.concatenate([jq[:, :, :12] @ st.S, jq[:, :, 12:]], axis=2)
     dv = rows(jac[:, :, 12 + n + ni : 24 + n + ni]) @ st.S
     da = rows(jac[:, :, 24 + n + ni :]) @ st.S
-    got_q, got_v = st.force_jacobians(q, v, 0.0, a)
+    got_q, got_v = st.force_jacobians(q, v, T, a)
     assert relerr(got_q, dq.ravel()) < TOL
     assert relerr(got_v, dv.ravel()) < TOL
-    assert relerr(st.acceleration_jacobian(q, v, 0.0, a), da.ravel()) < TOL
+    assert relerr(st.acceleration_jacobian(q, v, T, a), da.ravel()) < TOL
 
 
 @pytest.mark.parametrize("model", ["pitt-peters", "peters-he"])

@@ -198,3 +198,45 @@ def test_wake_parameters_are_checked(kw, match):
             "mean_induced_inflow": 0.05, **kw}
     with pytest.raises(ValueError, match=match):
         TipVortexWake(**args)
+
+
+def test_blade_velocities_trail_each_segment_with_its_blades_circulation_then():
+    # Γ(ψ) = Γ0 (1 + 0.5 cos ψ + 0.2 sin 2ψ) on the azimuth grid, the tip released from a
+    # flapping circle; every segment summed by hand: its blade's Γ when the blade was at
+    # ψ_b − φ (the segment's mid age φ), plus the other blades' bound vortices
+    n_psi, q = 24, 3
+    wake = TipVortexWake(R, q, 0.15, 0.01, 0.04, turns=2, segments_per_turn=36,
+                         release_radius=0.95)
+    psi = 2 * math.pi * np.arange(n_psi) / n_psi
+    gamma = 30.0 * (1 + 0.5 * np.cos(psi) + 0.2 * np.sin(2 * psi))
+    release = 0.95 * R * np.stack([np.cos(psi), np.sin(psi), 0.05 * np.cos(psi)], axis=1)
+    root = 0.2 * release
+    rng = np.random.default_rng(4)
+    points = np.einsum("jab,kb->jka", _turn(psi), np.column_stack(
+        [np.linspace(0.3, 0.9, 5) * R, rng.normal(0, 0.02, 5), rng.normal(0, 0.05, 5)]))
+    core = 0.03
+    got = wake.blade_velocities(points, gamma, release, np.stack([root, release], axis=1), core)
+    for j in (0, 5, 17):
+        expect = np.zeros((5, 3))
+        for k in range(q):
+            psi_k = psi[j] + 2 * math.pi * k / q
+            pts = wake.filament(psi_k, release)
+            phi = wake.ages()
+            mid = 0.5 * (phi[1:] + phi[:-1])
+            trailed = np.interp(np.mod(psi_k - mid, 2 * math.pi),
+                                np.append(psi, 2 * math.pi), np.append(gamma, gamma[0]))
+            expect += induced_velocity(points[j], pts[:-1], pts[1:], trailed, core)
+            if k:
+                i = (j + k * n_psi // q) % n_psi
+                expect += induced_velocity(points[j], root[i:i + 1], release[i:i + 1],
+                                           gamma[i], core)
+        np.testing.assert_allclose(got[j], expect, rtol=0, atol=1e-12 * np.abs(expect).max())
+    # the filament leaves from the release history: age 0 at the blade's own release point
+    np.testing.assert_allclose(wake.filament(psi[7], release)[0], release[7], atol=1e-12)
+
+
+def _turn(psi):
+    c, s = np.cos(psi), np.sin(psi)
+    rot = np.zeros((len(psi), 3, 3))
+    rot[:, 0, 0], rot[:, 0, 1], rot[:, 1, 0], rot[:, 1, 1], rot[:, 2, 2] = c, -s, s, c, 1.0
+    return rot
