@@ -27,7 +27,9 @@ The model, built from solver parts:
   in forward flight at ``flight_speed`` with the shaft tilted forward by ``shaft_tilt``.
 * four bifilars (:func:`studies.bifilar.add_bifilar`) on the hub at 45° from the blades:
   ``free``, ``locked`` (paper case 0) or ``equivalent`` (the linear fixed-frame absorber of
-  :mod:`studies.equivalent` on the shaft head in their place).
+  :mod:`studies.equivalent` on the shaft head in their place, its spring tuned at
+  ``equivalent_tuning_speed`` and kept at any ``hub_speed``, as a physical spring–mass
+  absorber's; the bifilars' tuning order follows Ω).
 * time integration — generalized-α with ρ∞ = ``rho_inf`` (0.5), ``steps_per_rev`` (240) steps
   per revolution. The tuned absorbers' notch is as sensitive to the scheme's frequency error as
   to the pins' 1 % damping, and the bifilars (tuned in the rotating frame) and their equivalent
@@ -49,6 +51,10 @@ point and restarts the model from it (beam nodes' and bodies' triads combined on
 group). With ``shooting_window = 0`` it marches instead, and each lag damper then also carries
 delayed feedback over one revolution (:func:`lag_feedback_gains`, damping ratio
 ``lag_feedback``), which vanishes on any periodic response and is removed before recording.
+
+Besides the loads, each case archives the controls flown, the shaft power (the drive's
+moment about the shaft axis, mean × Ω), blade 0's flap angle and its first harmonics, and the
+in-plane hub moments at the fuselage-beam's top (:data:`OUTPUTS`).
 
 ``docs/models.md`` gives the assumptions, the defaults and the measured accuracy.
 """
