@@ -120,12 +120,14 @@ class AbsorberStart:
 
 
 def add_absorbers(model: Model, hub, carrier, holes: Holes, p: Parameters, damping: float,
-                  start: AbsorberStart | None = None) -> list[BifilarParts] | EquivalentParts:
+                  start: AbsorberStart | None = None, tuning_speed: float | None = None
+                  ) -> list[BifilarParts] | EquivalentParts:
     """The four absorbers on ``hub`` (spinning at ``hub_speed`` about +z, frame = identity at
     t = 0, centre and state as ``start`` says) as ``p.bifilar`` says, with the pin damping
     ``damping`` (N·m·s/rad, :func:`pin_damping`); the equivalent's particle rides on
-    ``carrier`` (non-rotating, d3 the rotor axis). Returns the bifilars' parts or the
-    equivalent's."""
+    ``carrier`` (non-rotating, d3 the rotor axis), its spring tuned at ``tuning_speed``
+    (rad/s; ``None``: at ``hub_speed``, see :func:`studies.equivalent.add_equivalent`).
+    Returns the bifilars' parts or the equivalent's."""
     omega = p.hub_speed
     s = start if start is not None else AbsorberStart()
     if p.bifilar == "equivalent":
@@ -133,7 +135,8 @@ def add_absorbers(model: Model, hub, carrier, holes: Holes, p: Parameters, dampi
         absorber = equivalent_absorber(holes, N_BIFILARS, damping)
         w0, wd0 = particle_state(absorber, omega, s.angles, s.rates, AZIMUTHS)
         return add_equivalent(model, carrier, hub, s.center, absorber, omega,
-                              first_angle=FIRST_ANGLE, displacement=w0, rate=wd0)
+                              first_angle=FIRST_ANGLE, displacement=w0, rate=wd0,
+                              tuning_speed=tuning_speed)
     locked = p.bifilar == "locked"
     return [add_bifilar(model, hub, holes, 0.0 if locked else s.angles[i], angle=AZIMUTHS[i],
                         prefix=f"b{i}_", omega=omega, locked=locked, pin_damping=damping,

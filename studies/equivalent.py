@@ -203,10 +203,36 @@ class EquivalentAbsorber:
         """k = m_e (ñ² − 1) Ω² (N/m) at the hub speed Ω (rad/s)."""
         return self.effective_mass * (self.order**2 - 1.0) * hub_speed**2
 
-    def frequencies(self, hub_speed: float) -> tuple[float, float]:
+    def frequencies(self, hub_speed: float,
+                    tuning_speed: float | None = None) -> tuple[float, float]:
         """Free whirl frequencies (rad/s, fixed frame) with the carrier held: progressive
-        (ñ + 1)Ω and regressive (ñ − 1)Ω (a negative value whirls progressively)."""
-        return (self.order + 1.0) * hub_speed, (self.order - 1.0) * hub_speed
+        (ñ + 1)Ω and regressive (ñ − 1)Ω (a negative value whirls progressively).
+
+        Parameters
+        ----------
+        hub_speed
+            Ω (rad/s): sets the gyroscopic and rotating-damper terms.
+        tuning_speed
+            Ω_t (rad/s) at which the spring was tuned, k = m_e (ñ² − 1) Ω_t²
+            (:meth:`stiffness`); ``None``: Ω, the spring retuned at every speed as the
+            bifilars it stands for are. With w = W e^{iλt} the particle's equation gives
+            λ² − 2Ωλ − k/m_e = 0, so λ = Ω ± √(Ω² + (ñ² − 1) Ω_t²): (ñ ± 1)Ω only at
+            Ω = Ω_t.
+
+        Raises
+        ------
+        ValueError
+            If Ω² + (ñ² − 1) Ω_t² < 0 (a spring so negative that the particle is unstable).
+        """
+        if tuning_speed is None:
+            return (self.order + 1.0) * hub_speed, (self.order - 1.0) * hub_speed
+        disc = hub_speed**2 + self.stiffness(tuning_speed) / self.effective_mass
+        if disc < 0:
+            raise ValueError(f"tuning_speed = {tuning_speed!r} rad/s at hub_speed = "
+                             f"{hub_speed!r} rad/s: the spring m_e (ñ² − 1) Ω_t² makes the "
+                             "particle unstable (no whirl frequency)")
+        root = float(np.sqrt(disc))
+        return hub_speed + root, root - hub_speed
 
     def swing_terms(self, hub_speed: float, whirl: float | ArrayLike) -> tuple:
         """(S, D), complex, with Â/Z = S/D (:meth:`swing_response`): S = −i B ω² (kg·m/s²) and
@@ -329,7 +355,8 @@ def _velocity0(body: Body, point: Array) -> tuple[Array, Array]:
 def add_equivalent(model: Model, carrier: Body, hub: Body | None, center: ArrayLike,
                    absorber: EquivalentAbsorber, omega: float, prefix: str = "eq_",
                    first_angle: float = np.pi / 4, displacement: ArrayLike = (0.0, 0.0),
-                   rate: ArrayLike = (0.0, 0.0)) -> EquivalentParts:
+                   rate: ArrayLike = (0.0, 0.0),
+                   tuning_speed: float | None = None) -> EquivalentParts:
     """Add the equivalent absorber of N bifilars to ``model``.
 
     Parameters
@@ -360,6 +387,12 @@ def add_equivalent(model: Model, carrier: Body, hub: Body | None, center: ArrayL
     displacement, rate
         w and ẇ (m, m/s) at t = 0 in the carrier's axes (d1, d2): the particle's start
         relative to the hub centre, e.g. :func:`particle_state` of given pin angles and rates.
+    tuning_speed
+        Ω_t (rad/s, > 0) at which the spring was tuned: its stiffness is
+        k = m_e (ñ² − 1) Ω_t² whatever ``omega`` is, as a physical spring–mass absorber keeps
+        the spring it was built with; the gyroscopic and rotating-damper terms follow
+        ``omega``. ``None`` (default): Ω_t = Ω, the spring retuned with the speed as the
+        bifilars' centrifugal stiffness is, the exact equivalent of the bifilars.
 
     Returns
     -------
@@ -369,6 +402,8 @@ def add_equivalent(model: Model, carrier: Body, hub: Body | None, center: ArrayL
     if not isinstance(absorber, EquivalentAbsorber):
         raise ValueError(f"absorber must be an EquivalentAbsorber, got {type(absorber).__name__}")
     _positive("omega", omega)
+    if tuning_speed is not None:
+        _positive("tuning_speed", tuning_speed)
     if isinstance(carrier, PointMass) or carrier is None:
         raise ValueError("carrier must be a rigid body, beam node or prescribed body (it needs "
                          "axes: d3 is the rotor axis)")
@@ -401,7 +436,8 @@ def add_equivalent(model: Model, carrier: Body, hub: Body | None, center: ArrayL
     # carrier's axes: f = −K w − C ẇ. The coupling's point is the hub centre c0 on both
     # bodies, so on the particle it sits −w0 from the particle: Δ = w − w0, and the spring is
     # unstretched at w = 0 with the rest value −w0
-    k_mat = ab.stiffness(omega) * np.diag([1.0, 1.0, 0.0]) - c_e * omega * _ZX
+    spring = ab.stiffness(omega if tuning_speed is None else float(tuning_speed))
+    k_mat = spring * np.diag([1.0, 1.0, 0.0]) - c_e * omega * _ZX
     c_mat = c_e * np.diag([1.0, 1.0, 0.0]) - 2.0 * m_e * omega * _ZX
     coupling = FrameCoupling(f"{prefix}coupling", carrier, particle, frame=carrier, point=c0,
                              stiffness=k_mat, damping=c_mat, rest=-start[0])

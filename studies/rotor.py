@@ -27,7 +27,9 @@ The model, built from solver parts:
   in forward flight at ``flight_speed`` with the shaft tilted forward by ``shaft_tilt``.
 * four bifilars (:func:`studies.bifilar.add_bifilar`) on the hub at 45° from the blades:
   ``free``, ``locked`` (paper case 0) or ``equivalent`` (the linear fixed-frame absorber of
-  :mod:`studies.equivalent` on the shaft head in their place).
+  :mod:`studies.equivalent` on the shaft head in their place, its spring tuned at
+  ``equivalent_tuning_speed`` and kept at any ``hub_speed``, as a physical spring–mass
+  absorber's; the bifilars' tuning order follows Ω).
 * time integration — generalized-α with ρ∞ = ``rho_inf`` (0.5), ``steps_per_rev`` (240) steps
   per revolution. The tuned absorbers' notch is as sensitive to the scheme's frequency error as
   to the pins' 1 % damping, and the bifilars (tuned in the rotating frame) and their equivalent
@@ -49,6 +51,10 @@ point and restarts the model from it (beam nodes' and bodies' triads combined on
 group). With ``shooting_window = 0`` it marches instead, and each lag damper then also carries
 delayed feedback over one revolution (:func:`lag_feedback_gains`, damping ratio
 ``lag_feedback``), which vanishes on any periodic response and is removed before recording.
+
+Besides the loads, each case archives the controls flown, the shaft power (the drive's
+moment about the shaft axis, mean × Ω), blade 0's flap angle and its first harmonics, and the
+in-plane hub moments at the fuselage-beam's top (:data:`OUTPUTS`).
 
 ``docs/models.md`` gives the assumptions, the defaults and the measured accuracy.
 """
@@ -86,6 +92,7 @@ from studies.absorbers import OUTPUTS as ABSORBER_OUTPUTS
 from studies.absorbers import PARAMETERS as ABSORBERS
 from studies.bifilar import BifilarParts
 from studies.equivalent import EquivalentParts
+from studies.harmonics import harmonics
 from studies.holes import Holes
 from studies.parameters import ModelSpec, Output, Param, ParameterError, Parameters
 from studies.periodic import march, shoot, stepper, to_rotating
@@ -130,8 +137,18 @@ NEWTON_STEPS = 240
 # shoots to periodic at 360 or 480 steps/rev (it does in 13.5 and 14 revolutions without).
 WAKE_TOLERANCE = 30.0
 
+# the nominal rotor speed, where the absorbers' hub_speed takes its default
+NOMINAL_SPEED: float = ABSORBERS["hub_speed"].default
+
 PARAMETERS: dict[str, Param] = {
     **ABSORBERS,
+    "equivalent_tuning_speed": Param(
+        NOMINAL_SPEED, "rad s-1", "rotor speed Ω_t at which the equivalent absorber (bifilar "
+        "= equivalent) was tuned: it keeps the spring m_e (ñ² − 1) Ω_t² at every hub_speed, "
+        "as a physical fixed-frame spring–mass absorber does, so away from Ω_t its whirl "
+        "frequencies are no longer (ñ ± 1)Ω, while free bifilars keep their tuning order ñ "
+        "at any speed (their restoring force is centrifugal); unused otherwise",
+        minimum=ABSORBERS["hub_speed"].minimum, maximum=ABSORBERS["hub_speed"].maximum),
     "collective": Param(10.7, "degree", "collective pitch θ0 (deck twist reference, ≈ 0.7R)",
                         minimum=-5.0, maximum=20.0),
     "cyclic_sine": Param(-4.9, "degree", "longitudinal cyclic θs (on sin ψ)", minimum=-15.0,
@@ -232,6 +249,28 @@ OUTPUTS: dict[str, Output] = {
     "fuselage_moment_fixed": Output(
         "N m", "fuselage-beam root bending moments (M11, M22), fixed frame",
         components=("fuselage_moment_x_fixed", "fuselage_moment_y_fixed")),
+    "hub_moment_x_fixed": Output("N m", "in-plane moment transmitted to the fuselage-beam at "
+                                 "the hub centre, about x", history=True,
+                                 figure="hub_moment_history"),
+    "hub_moment_y_fixed": Output("N m", "in-plane moment transmitted to the fuselage-beam at "
+                                 "the hub centre, about y", history=True,
+                                 figure="hub_moment_history"),
+    "hub_moment_fixed": Output(
+        "N m", "in-plane hub moments transmitted to the fuselage-beam at the hub centre, "
+        "fixed frame", components=("hub_moment_x_fixed", "hub_moment_y_fixed")),
+    "flap_angle": Output("degree", "blade 0 flap angle β at its hinge (positive up)",
+                         history=True, harmonics=True),
+    "control_collective": Output("degree", "collective pitch θ0 the case flew", dims=()),
+    "control_cyclic_sine": Output("degree", "longitudinal cyclic θs (on sin ψ) the case flew",
+                                  dims=()),
+    "control_cyclic_cosine": Output("degree", "lateral cyclic θc (on cos ψ) the case flew",
+                                    dims=()),
+    "control_shaft_tilt": Output("degree", "forward shaft tilt the case flew", dims=()),
+    "rotor_power": Output("W", "shaft power the rotor absorbs: mean drive torque times the "
+                          "rotor speed", dims=()),
+    "flapping_cosine": Output("degree", "blade 0 longitudinal flapping β1c (on cos ψ)",
+                              dims=()),
+    "flapping_sine": Output("degree", "blade 0 lateral flapping β1s (on sin ψ)", dims=()),
     "thrust_coefficient": Output("1", "thrust coefficient C_T = T / (ρ π R² (Ω R)²), mean "
                                  "over the recorded revolutions", dims=()),
     "thrust_coefficient_over_solidity": Output("1", "blade loading C_T/σ", dims=()),
@@ -484,7 +523,9 @@ def build(p: Parameters, d: RotorDesign | None = None, damping_factor: float = 1
         lines.append(model.add(airloads(blade, k, p, flight, inflow, wind)))
         blades.append(blade)
     # ---- bifilars (or their equivalent, whose particle rides on the shaft head)
-    absorbers = add_absorbers(model, hub, shaft, holes, p, d.pin_damping)
+    # (the equivalent keeps the spring it was tuned with at equivalent_tuning_speed)
+    absorbers = add_absorbers(model, hub, shaft, holes, p, d.pin_damping,
+                              tuning_speed=p.equivalent_tuning_speed)
     return model, RotorParts(hub, shaft, fus, blades, lines, inflow, absorbers, holes,
                              d.fuselage_stiffness, c_fus, wake)
 
@@ -507,7 +548,7 @@ class _Sampler:
     """One row of outputs at the integrator's current state (fixed column layout)."""
 
     COLUMNS = ("t", "x", "y", "fx", "fy", "fz", "m11", "m22", "cmx", "cmy", "thrust", "lam0",
-               "v3", "v2", "n1", "t1")
+               "v3", "v2", "n1", "t1", "mhx", "mhy", "torque", "flap")
 
     def __init__(self, system: System, parts: RotorParts) -> None:
         self.s = system
@@ -517,8 +558,11 @@ class _Sampler:
         # blade 0's root loads from the pitch bearing's reaction (its Lagrange multipliers):
         # the discrete system's exact equilibrium, converged with 6 elements to 2 % where the
         # beam's own strains at the root (SectionProbe) need more than 14
-        self.pitch = next(j for j in system.model.elements
-                          if getattr(j, "name", None) == "pitch0")
+        joints = {getattr(j, "name", None): j for j in system.model.elements}
+        self.pitch = joints["pitch0"]
+        # the drive (shaft to hub) and blade 0's flap hinge (hub to its flap link)
+        self.drive = joints["rotor"]
+        self.flap = joints["flap0"]
         self.o_blade_root = system.offset[parts.blades[0].root]
         self.o_shaft = system.offset[parts.shaft]
         self.o_inflow = None if parts.inflow is None else system.offset[parts.inflow]
@@ -533,6 +577,10 @@ class _Sampler:
         # force the top section passes down the fuselage-beam, from material to fixed axes
         d = q[self.o_top + 3 : self.o_top + 12].reshape(3, 3)  # rows: d1, d2, d3
         f_top = loads[1, :3] @ d
+        # and the moment it passes down at the hub centre (the beam's top), likewise: the
+        # stress resultant at the top is the load of the shaft head (and the rotor above it)
+        # on the beam
+        m_top = loads[1, 3:6] @ d
         m11, m22 = loads[0, 4], loads[0, 5]
         cm, phis = self.absorbers(q, integ.t)
         acc = getattr(integ, "qdd", None)
@@ -552,8 +600,17 @@ class _Sampler:
         d_root = q[o + 3 : o + 12].reshape(3, 3)
         n1, v2, v3 = -(d_root @ force)
         t1 = -(d_root[0] @ moment)
+        # the drive's moment on the hub about the shaft axis (the shaft head's d3, tilting
+        # with the fuselage-beam): the shaft torque; the joint prescribes the hub's rotation
+        # relative to the shaft at Ω about that axis, so its power into the rotor is torque Ω
+        _, drive = s.reaction(self.drive, q, integ.lam, integ.t)
+        torque = drive @ q[self.o_shaft + 9 : self.o_shaft + 12]
+        # the flap hinge's relative rotation is right-handed about the blade's lead direction
+        # (the hub's tangential axis), which turns the blade down: β up is its opposite
+        beta = -s.joint_angle(self.flap, q)
         return np.array([integ.t, x[0], x[1], f_top[0], f_top[1], f_top[2], m11, m22,
-                         cm[0], cm[1], thrust, lam0, v3, v2, n1, t1, *np.degrees(phis)])
+                         cm[0], cm[1], thrust, lam0, v3, v2, n1, t1, m_top[0], m_top[1],
+                         torque, math.degrees(beta), *np.degrees(phis)])
 
 
 def newton_tolerance(steps_per_rev: int) -> float:
@@ -747,7 +804,12 @@ def simulate(p: Parameters) -> xr.Dataset:
         "blade_root_shear_lag": col["v2"],
         "blade_root_axial": col["n1"],
         "blade_root_torsion": col["t1"],
+        "hub_moment_x_fixed": col["mhx"],
+        "hub_moment_y_fixed": col["mhy"],
+        "flap_angle": col["flap"],
     }
+    # blade 0's first flap harmonics on its azimuth ψ = Ωt (the recording starts at ψ0)
+    flap = harmonics(col["flap"], nrev, p.revolutions, 1, psi0=omega * float(t[0]))
     facts = {
         **periodic.run_facts(
             rec, hub_speed=omega, revolutions=p.revolutions, samples_per_rev=nrev,
@@ -763,6 +825,17 @@ def simulate(p: Parameters) -> xr.Dataset:
         "fuselage_damping": np.float64(parts.fuselage_damping),
         "run_wake_updates": np.int32(0 if wake is None else wake.updates),
         "run_wake_change": np.float64(0.0 if wake is None else wake.change),
+        # the controls flown: today the parameters themselves
+        "control_collective": np.float64(p.collective),
+        "control_cyclic_sine": np.float64(p.cyclic_sine),
+        "control_cyclic_cosine": np.float64(p.cyclic_cosine),
+        "control_shaft_tilt": np.float64(p.shaft_tilt),
+        # over whole revolutions the kinetic and strain energies repeat, so the mean shaft
+        # power is what the air, the dampers and the pitch links take (tests/studies/
+        # test_rotor_outputs.py checks it against the airloads' power)
+        "rotor_power": np.float64(col["torque"].mean() * omega),
+        "flapping_cosine": np.float64(flap.cos[1]),
+        "flapping_sine": np.float64(flap.sin[1]),
     }
     ds = SPEC.dataset({**series, **facts}, {"message": rec.note})
     return ds
@@ -815,4 +888,4 @@ def _check(p: Parameters) -> None:
 SPEC = ModelSpec("rotor", PARAMETERS, simulate, _check,
                  description="four-bladed elastic UH-60 rotor with aerodynamics and four "
                              "bifilars on a fuselage-beam",
-                 outputs=OUTPUTS, version="3")
+                 outputs=OUTPUTS, version="4")
