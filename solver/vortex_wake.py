@@ -159,8 +159,7 @@ class TipVortexWake:
         return np.concatenate(starts), np.concatenate(ends), np.concatenate(ages)
 
     def blade_velocities(self, points: Array, circulation: Array, release: Array,
-                         bound: Array | None = None, core: float = 0.0,
-                         near_age: float = 0.0) -> Array:
+                         bound: Array | None = None, core: float = 0.0) -> Array:
         """Velocity the wake induces at blade 0's sections over a revolution, every blade
         trailing as blade 0 does (a periodic response with the blades alike).
 
@@ -180,11 +179,6 @@ class TipVortexWake:
             own, on its sections' line, is left out); ``None``: not included.
         core
             Vatistas core radius r_c (m) of the tip vortices.
-        near_age
-            Wake age (rad) below which blade 0's own tip vortex is left out: its near wake,
-            a trailed sheet still rolling up, which a lifting line's tip loss stands for (a
-            concentrated vortex there, beside the outboard sections, would set their loads
-            by its distance to the nearest quadrature point).
 
         Returns
         -------
@@ -209,7 +203,6 @@ class TipVortexWake:
             a, b, age = self.segments(psi, release)
             blade = np.repeat(np.arange(self.blades), len(age) // self.blades)
             gam = periodic_interp(psi + 2.0 * math.pi * blade / self.blades - age, circulation)
-            gam[(blade == 0) & (age < near_age)] = 0.0
             rc = np.full(len(gam), core)
             if bound is not None and self.blades > 1:
                 others = [(j + k * step) % n_psi for k in range(1, self.blades)]

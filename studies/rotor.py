@@ -321,7 +321,7 @@ class RotorParts:
     fuselage: Beam
     blades: list[Beam]
     lines: list[LiftingLine]
-    inflow: DynamicInflow | None
+    inflow: DynamicInflow
     absorbers: list[BifilarParts] | EquivalentParts
     holes: Holes
     fuselage_stiffness: float
@@ -506,18 +506,17 @@ def build(p: Parameters, d: RotorDesign | None = None, damping_factor: float = 1
     flight = FlightCondition(p.flight_speed, math.radians(p.shaft_tilt),
                              p.air_density)
     m = p.inflow_harmonics
-    inflow = None
+    # a first guess of the thrust coefficient starts the inflow near its level
+    inflow = DynamicInflow("inflow", flight, UH60A.radius, omega, model="peters-he",
+                           harmonics=m, power=m + 1, initial_thrust=THRUST_GUESS)
+    model.add(inflow)
     if p.inflow == "peters_he":
-        # a first guess of the thrust coefficient starts the inflow near its level
-        inflow = DynamicInflow("inflow", flight, UH60A.radius, omega, model="peters-he",
-                               harmonics=m, power=m + 1, initial_thrust=THRUST_GUESS)
-        model.add(inflow)
         wake = None
     blades, lines = [], []
     for k in range(N_BLADES):
         blade, _ = add_blade(model, hub, k, p, damping_factor,
                              d.lag_feedback if feedback else None)
-        if inflow is None and wake is None:
+        if p.inflow == "prescribed_wake" and wake is None:
             wake = new_wake(p, airloads(blade, k, p, flight, None))
         wind = None if wake is None else wake.winds[k]
         lines.append(model.add(airloads(blade, k, p, flight, inflow, wind)))
@@ -531,13 +530,9 @@ def build(p: Parameters, d: RotorDesign | None = None, damping_factor: float = 1
 
 
 def new_wake(p: Parameters, line: LiftingLine) -> RotorWake:
-    """The prescribed wake of a case, started from ``line``'s sections (blade 0's, built at
-    ψ = 0 along +x) with uniform circulation of :data:`THRUST_GUESS`."""
-    wake = RotorWake(p, line.n_sections, N_BLADES, THRUST_GUESS)
-    s = line.sections["s"]
-    e = section_origin(include_cuff=True)
-    wake.start(np.column_stack([e + s, np.zeros_like(s), np.zeros_like(s)]))
-    return wake
+    """The prescribed wake of a case, for ``line``'s sections (blade 0's), with no correction
+    of the Peters–He inflow yet."""
+    return RotorWake(p, line.sections["s"], line.sections["ds"], N_BLADES)
 
 
 def _line_set(system: System, line: LiftingLine):
@@ -565,7 +560,7 @@ class _Sampler:
         self.flap = joints["flap0"]
         self.o_blade_root = system.offset[parts.blades[0].root]
         self.o_shaft = system.offset[parts.shaft]
-        self.o_inflow = None if parts.inflow is None else system.offset[parts.inflow]
+        self.o_inflow = system.offset[parts.inflow]
         self.o_blade_tip = system.offset[parts.blades[0].tip]
         self.absorbers = AbsorberProbe(system, parts.absorbers, parts.hub)
         self.o_top = system.offset[parts.fuselage.tip]
@@ -588,7 +583,7 @@ class _Sampler:
         thrust = float(np.sum(air["force"][:, 2] * air["ds"]))
         if parts.wake is not None:  # keep blade 0's revolution for the wake's next update
             o = self.o_blade_tip
-            parts.wake.record(integ.t, air, q[o : o + 3], thrust)
+            parts.wake.record(integ.t, air, self.line_set.air(integ.t), q[o : o + 3], thrust)
             lam0 = parts.wake.mean_inflow(integ.t)
         else:
             lam0 = parts.inflow.mean_inflow(q[self.o_inflow : self.o_inflow

@@ -56,12 +56,10 @@ PARAMETERS: dict[str, Param] = {
                         minimum=0.5, maximum=50.0),
     "wake_segments_per_turn": Param(72, "1", "straight vortex segments per revolution of "
                                     "wake age", minimum=12, maximum=1440),
-    "wake_core_radius": Param(0.25, "1", "Vatistas core radius of the tip vortices, in tip "
-                              "chords", minimum=0.01, maximum=5.0),
-    "wake_near_age": Param(30.0, "degree", "wake age below which a blade's own tip vortex "
-                           "is left out of the flow it sees (its near wake, still rolling up: "
-                           "the lifting line's tip loss stands for it)", minimum=0.0,
-                           maximum=180.0),
+    "wake_core_radius": Param(1.0, "1", "Vatistas core radius of the tip vortices as the "
+                              "lifting lines see them, in tip chords (a lifting line resolves "
+                              "no flow detail closer than about a chord)", minimum=0.05,
+                              maximum=5.0),
     "wake_release_radius": Param(UH60A.tip_loss, "1", "radius the tip vortices leave the "
                                  "blades at, on R (the tip-loss station: the circulation "
                                  "drops to zero there)", minimum=0.5, maximum=1.0),
@@ -81,6 +79,10 @@ PARAMETERS: dict[str, Param] = {
 MIN_SPEED_FRACTION = 0.05
 # Iterates Anderson's acceleration combines (RotorWake.update).
 ANDERSON_DEPTH = 5
+# Points over each section's width at which the wake's velocity is averaged: a tip vortex
+# passing a blade makes a spike a few core radii wide, which the sections (Gauss points of the
+# blade elements, 0.3–0.9 m apart) would sample, not integrate.
+SUBSECTIONS = 4
 
 
 class RotorWake:
@@ -91,17 +93,22 @@ class RotorWake:
     ----------
     p
         The rotor's parameters (:data:`PARAMETERS` among them).
-    n_sections
-        Aerodynamic sections per blade.
+    span, widths
+        Arc length s (m) and quadrature weight ds (m) of each aerodynamic section of a blade
+        (:attr:`solver.lifting_line.LiftingLine.sections`).
     blades
         Number of blades Q; blade k trails a quarter (1/Q) revolution behind blade k − 1.
-    thrust_guess
-        Thrust coefficient C_T of the first wake (uniform circulation 2π C_T Ω R² / Q).
     """
 
-    def __init__(self, p: Parameters, n_sections: int, blades: int,
-                 thrust_guess: float) -> None:
+    def __init__(self, p: Parameters, span: Array, widths: Array, blades: int) -> None:
+        n_sections = len(span)
         self.p = p
+        # each section sees the wake's velocity averaged over SUBSECTIONS points spread over
+        # its width ds (positions interpolated linearly along the span between sections)
+        u = (np.arange(SUBSECTIONS) + 0.5) / SUBSECTIONS - 0.5
+        sub = (span[:, None] + widths[:, None] * u).ravel()
+        i = np.clip(np.searchsorted(span, sub), 1, n_sections - 1)
+        self._sub = (i, (sub - span[i - 1]) / (span[i] - span[i - 1]))
         self.omega = p.hub_speed
         self.n = p.steps_per_rev
         self.blades = blades
@@ -116,12 +123,15 @@ class RotorWake:
         self.lam_f = p.flight_speed * math.sin(tilt) / (self.omega * r)
         # blade 0's histories over its last revolution, by azimuth slot
         self.points = np.zeros((self.n, n_sections, 3))
+        self.inflow = np.zeros((self.n, n_sections, 3))
         self.gamma = np.zeros(self.n)
         self.tip = np.zeros((self.n, 3))
         self.root = np.zeros((self.n, 3))
         self.thrust = np.zeros(self.n)
         self.filled = np.zeros(self.n, dtype=bool)
-        self.thrust_guess = thrust_guess
+        # the disk-average weights r ds of the sections inside the tip vortices (from the
+        # first recorded step on; until then ds)
+        self.weights = widths.copy()
         self.updates = 0
         self.change = math.inf
         self.history: list[tuple[Array, Array]] = []  # (x, G(x) − x) for Anderson
@@ -140,50 +150,52 @@ class RotorWake:
     def core(self) -> float:
         return self.p.wake_core_radius * UH60A.chord
 
-    def start(self, points: Array) -> None:
-        """The first wake: the blades' sections at ``points`` (n_sections, 3) turned with the
-        azimuth, a flat tip path and uniform circulation of the thrust guess."""
-        psi = 2.0 * math.pi * np.arange(self.n) / self.n
-        c, s = np.cos(psi), np.sin(psi)
-        rot = np.zeros((self.n, 3, 3))
-        rot[:, 0, 0], rot[:, 0, 1], rot[:, 1, 0], rot[:, 1, 1] = c, -s, s, c
-        rot[:, 2, 2] = 1.0
-        pts = np.einsum("jab,kb->jka", rot, points)
-        r = UH60A.radius
-        tip = self.p.wake_release_radius * r * np.stack([c, s, np.zeros_like(c)], axis=1)
-        gam = np.full(self.n, 2.0 * math.pi * self.thrust_guess * self.omega * r * r
-                      / self.blades)
-        self.points[:] = pts
-        self.table[:] = self._velocities(pts, gam, tip, pts[:, 0], self.thrust_guess)
-
     def _velocities(self, points: Array, gamma: Array, tip: Array, root: Array,
                     ct: float) -> Array:
         bound = np.stack([root, tip], axis=1)
-        return self.wake(ct).blade_velocities(points, gamma, tip, bound, self.core,
-                                              math.radians(self.p.wake_near_age))
+        i, f = self._sub  # the subsections, extrapolated linearly beyond the end sections
+        sub = (1.0 - f)[None, :, None] * points[:, i - 1] + f[None, :, None] * points[:, i]
+        v = self.wake(ct).blade_velocities(sub, gamma, tip, bound, self.core)
+        return v.reshape(len(points), -1, SUBSECTIONS, 3).mean(axis=2)
 
-    def record(self, t: float, air: dict[str, Array], tip: Array, thrust: float) -> None:
-        """Keep blade 0's sections, circulation and tip at the time step of ``t`` (s), from
-        the lifting lines' ``airloads`` (``line`` 0 is blade 0) and blade 0's tip node."""
-        j = round(t * self.omega / (2.0 * math.pi) * self.n) % self.n
+    def record(self, t: float, air: dict[str, Array], wind: Array, tip: Array,
+               thrust: float) -> None:
+        """Keep blade 0's sections, circulation, Peters–He inflow and tip at the time step of
+        ``t`` (s), from the lifting lines' ``airloads`` (``line`` 0 is blade 0), the air
+        they are given (free stream and wind, :meth:`~solver.lifting_line.LiftingLineSet.air`)
+        and blade 0's tip node."""
+        j = self.slot(t)
         sel = air["line"] == 0
+        # the Peters–He states' induced velocity −λΩR ẑ: the air the sections see less the
+        # air they are given
+        self.inflow[j] = air["air"][sel] - wind[sel]
         u = air["u"][sel]
         ok = np.abs(u) > MIN_SPEED_FRACTION * self.omega * UH60A.radius
         gam = np.where(ok, air["lift"][sel] / (self.p.air_density * np.where(ok, u, 1.0)), 0.0)
         pos = air["position"][sel]
         self.points[j] = pos
-        self.gamma[j] = gam.max()
+        # the tip vortex of the blade's thrust: Γ_v ∫ r dr = ∫ Γ r dr over the lifting span
+        r = np.hypot(pos[:, 0], pos[:, 1])
+        self.weights = r * air["ds"][sel] * (r < self.p.wake_release_radius * UH60A.radius)
+        self.gamma[j] = float(np.sum(gam * self.weights) / np.sum(self.weights))
         self.root[j] = pos[0]
         self.tip[j] = self.p.wake_release_radius * tip
         self.thrust[j] = thrust
         self.filled[j] = True
 
+    def slot(self, t: float) -> int:
+        """The azimuth slot (time step of the revolution) of blade 0 at time ``t`` (s)."""
+        return round(t * self.omega / (2.0 * math.pi) * self.n) % self.n
+
     def mean_inflow(self, t: float) -> float:
-        """The wake's induced inflow λ (on ΩR, down through the disk) at the blades' sections
-        at time ``t``, averaged over the disk (weights r ds, with r the sections' radius)."""
-        r = np.linalg.norm(self.points[:, :, :2], axis=2).mean(axis=0)
-        w = -sum(wind(t)[:, 2] for wind in self.winds) / self.blades
-        return float(np.sum(w * r) / np.sum(r)) / (self.omega * UH60A.radius)
+        """The induced inflow λ (on ΩR, down through the disk) the blades' sections see at
+        time ``t`` (Peters–He's and the correction's), averaged over the disk inside the tip
+        vortices (weights r ds): on the periodic response, the wake's."""
+        j, quarter = self.slot(t), self.n // self.blades
+        w = -np.mean([self.table[i, :, 2] + self.inflow[i, :, 2]
+                      for i in ((j + k * quarter) % self.n for k in range(self.blades))], axis=0)
+        return (float(np.sum(w * self.weights) / np.sum(self.weights))
+                / (self.omega * UH60A.radius))
 
     def update(self, accelerate: bool = False) -> float:
         """Recompute the wake from blade 0's last revolution and move the table towards it;
@@ -201,7 +213,7 @@ class RotorWake:
         disk = math.pi * UH60A.radius**2
         ct = float(self.thrust.mean()) / (self.p.air_density * disk
                                           * (self.omega * UH60A.radius) ** 2)
-        new = self._velocities(self.points, self.gamma, self.tip, self.root, ct)
+        new = self._velocities(self.points, self.gamma, self.tip, self.root, ct) - self.inflow
         scale = max(float(np.abs(new).max()), 1e-12)
         x, f = self.table.ravel().copy(), (new - self.table).ravel()
         self.change = float(np.abs(f).max()) / scale
