@@ -86,7 +86,7 @@ from solver.symmetry import CyclicSymmetry
 from solver.system import System
 from solver.timefunctions import TimeFunction, linear
 from solver.turning import TurningParts
-from studies import periodic, rotor_wake
+from studies import periodic, rotor_wake, trim
 from studies.absorbers import N_BIFILARS, AbsorberProbe, add_absorbers, holes_for, pin_damping
 from studies.absorbers import OUTPUTS as ABSORBER_OUTPUTS
 from studies.absorbers import PARAMETERS as ABSORBERS
@@ -159,6 +159,7 @@ PARAMETERS: dict[str, Param] = {
                           maximum=100.0),
     "shaft_tilt": Param(3.0, "degree", "forward shaft tilt (free stream blowing down through "
                         "the disk)", minimum=-15.0, maximum=15.0),
+    **trim.PARAMETERS,
     "air_density": Param(1.225, "kg m-3", "air density", minimum=0.1, maximum=2.0),
     "blade_elements": Param(6, "1", "cubic beam elements per blade, hinge to tip", minimum=2,
                             maximum=20),
@@ -279,6 +280,7 @@ OUTPUTS: dict[str, Output] = {
         "N m-1", "in-plane stiffness of the fuselage-beam at the hub, 3 EI / L^3 (EI times "
         "fuselage_bending_stiffness_scale)", dims=()),
     "fuselage_damping": Output("N s m-1", "in-plane damper at the shaft head", dims=()),
+    **trim.OUTPUTS,
     **periodic.RUN_OUTPUTS,
     "run_unknowns": Output("1", "unknowns of the multibody model", dims=()),
     "run_wake_updates": Output("1", "updates of the prescribed wake (0 with Peters–He)",
@@ -349,12 +351,16 @@ def lag_feedback_gains(p: Parameters) -> tuple[float, float, float]:
 
 
 def add_blade(model: Model, hub, k: int, p: Parameters, damping_factor: float = 1.0,
-              feedback: tuple[float, float, float] | None = None
+              feedback: tuple[float, float, float] | None = None,
+              controls: trim.ControlSchedule | None = None
               ) -> tuple[Beam, RelativeRotation]:
     """Blade ``k`` (azimuth kπ/2 at t = 0) on ``hub`` (a body spinning at ``hub_speed`` about
     +z, frame = identity at t = 0): flap, lag and driven pitch revolutes at the hinge, joined
     by massless links, and the lag damper (× ``damping_factor``; with ``feedback``, the gains
-    of :func:`lag_feedback_gains`, also the delayed feedback). Returns (beam, damper)."""
+    of :func:`lag_feedback_gains`, also the delayed feedback). The pitch follows the
+    parameters' controls, or ``controls`` (a trim's schedule; the blade is built at the
+    parameters' pitch either way, so a rebuilt model takes the same state). Returns (beam,
+    damper)."""
     omega = p.hub_speed
     e = section_origin(include_cuff=True)
     r_tw, tw_s = blade_twist("structural")
@@ -365,6 +371,8 @@ def add_blade(model: Model, hub, k: int, p: Parameters, damping_factor: float = 
     pitch = swashplate(math.radians(p.collective), math.radians(p.cyclic_cosine),
                        math.radians(p.cyclic_sine), omega, psi)
     theta_start = pitch.value(0.0)
+    driven = (_shifted(pitch) if controls is None
+              else controls.pitch(psi, reference=theta_start))
 
     def twist(s):  # structural twist, the blade built at its pitch at t = 0
         return np.interp(np.asarray(s) + e, r_tw, tw_s) + theta_start
@@ -386,7 +394,7 @@ def add_blade(model: Model, hub, k: int, p: Parameters, damping_factor: float = 
               Revolute(f"flap{k}", hub, flap_link, point=hinge, axis=et),
               Revolute(f"lag{k}", flap_link, lag_link, point=hinge, axis=Z),
               Revolute(f"pitch{k}", lag_link, blade.root, point=hinge, axis=er,
-                       driven=_shifted(pitch)))
+                       driven=driven))
     if p.lag_damping > 0 or damper.feedback:
         model.add(damper)
     return blade, damper
@@ -469,12 +477,14 @@ def design(p: Parameters) -> RotorDesign:
 
 
 def build(p: Parameters, d: RotorDesign | None = None, damping_factor: float = 1.0,
-          feedback: bool = False, wake: RotorWake | None = None) -> tuple[Model, RotorParts]:
+          feedback: bool = False, wake: RotorWake | None = None,
+          controls: trim.ControlSchedule | None = None) -> tuple[Model, RotorParts]:
     """The rotor model for parameters ``p`` and their derived design ``d`` (default
     :func:`design`'s); ``damping_factor`` multiplies the lag and fuselage dampers (settling
     phase), ``feedback`` adds the delayed lag feedback (marching to the periodic response).
     With ``inflow = "prescribed_wake"`` the blades see ``wake``'s winds (a new
-    :class:`~studies.rotor_wake.RotorWake` if none is given) instead of Peters–He states."""
+    :class:`~studies.rotor_wake.RotorWake` if none is given) instead of Peters–He states.
+    ``controls``: a trim's control schedule (pitch and shaft tilt) instead of the parameters'."""
     omega = p.hub_speed
     d = design(p) if d is None else d
     holes = d.holes
@@ -503,8 +513,8 @@ def build(p: Parameters, d: RotorDesign | None = None, damping_factor: float = 1
     # value, as in studies.hub, keeps the driven rotation well conditioned)
     model.add(hub, Revolute("rotor", shaft, hub, axis=Z, driven=linear(omega)))
     # ---- blades, aerodynamics
-    flight = FlightCondition(p.flight_speed, math.radians(p.shaft_tilt),
-                             p.air_density)
+    tilt = math.radians(p.shaft_tilt) if controls is None else controls.shaft_tilt
+    flight = FlightCondition(p.flight_speed, tilt, p.air_density)
     m = p.inflow_harmonics
     inflow = None
     if p.inflow == "peters_he":
@@ -516,7 +526,7 @@ def build(p: Parameters, d: RotorDesign | None = None, damping_factor: float = 1
     blades, lines = [], []
     for k in range(N_BLADES):
         blade, _ = add_blade(model, hub, k, p, damping_factor,
-                             d.lag_feedback if feedback else None)
+                             d.lag_feedback if feedback else None, controls)
         if inflow is None and wake is None:
             wake = new_wake(p, airloads(blade, k, p, flight, None))
         wind = None if wake is None else wake.winds[k]
@@ -651,29 +661,35 @@ def integrator(system: System, p: Parameters, h: float, parts: RotorParts | None
                            book_work=book_work, turning=spin, tolerance_scale=scale)
 
 
-def _settle(p: Parameters, d: RotorDesign, h: float, wake: RotorWake | None
+def _settle(p: Parameters, d: RotorDesign, h: float, wake: RotorWake | None,
+            controls: trim.ControlSchedule | None = None, trimmer: trim.Trimmer | None = None
             ) -> tuple[dict[str, Any], int, int]:
     """March ``settle_revolutions`` with the lag and fuselage dampers multiplied by a factor
     that falls geometrically from ``settle_damping_factor`` towards 1, one value per
     revolution (each step down changes the forced response a little, so the transient it
-    starts is small), updating the prescribed ``wake`` (if any) after each; returns
+    starts is small), updating the prescribed ``wake`` (if any) and the ``trimmer``'s controls
+    (if any) after each; returns
     (integrator state to continue from, steps, Newton iterations)."""
     n, big = p.settle_revolutions, p.settle_damping_factor
     state = None
     steps = iterations = 0
     for rev in range(n):
         factor = big ** (1.0 - rev / n)
-        model, parts = build(p, d, damping_factor=factor, wake=wake)
+        model, parts = build(p, d, damping_factor=factor, wake=wake, controls=controls)
         system = System(model)
         integ = integrator(system, p, h, parts)
         if state is not None:
             integ.restore(state)
         step = stepper(integ, p.hub_speed)
-        sample = _Sampler(system, parts) if wake is not None else None
+        sample = _Sampler(system, parts) if wake is not None or trimmer else None
+        rows = []
         for _ in range(p.steps_per_rev):
             step()
             if sample is not None:
-                sample(integ)
+                rows.append(sample(integ))
+        if trimmer is not None and controls is not None:  # a Newton step on the controls
+            trim.update(trimmer, controls, np.array(rows), _Sampler.COLUMNS, p.steps_per_rev,
+                        integ.t, periodic=False)
         if wake is not None:
             report(f"wake update {wake.updates + 1}: change {wake.update():.3g}")
         state = integ.state()
@@ -701,13 +717,15 @@ def simulate(p: Parameters) -> xr.Dataset:
     settled = None
     # the prescribed wake (if any), shared by every model built below
     wake = build(p, d)[1].wake
+    # the controls flown (a trim changes them as the response settles) and the trim, if any
+    controls, trimmer = trim.schedule(p), trim.for_rotor(p)
     if p.settle_revolutions and p.settle_damping_factor != 1.0:
-        settled, steps, iterations = _settle(p, d, h, wake)
+        settled, steps, iterations = _settle(p, d, h, wake, controls, trimmer)
     # a restart cannot carry the delay line of the lag feedback: shooting replaces it
     feedback = p.lag_feedback > 0 and not p.shooting_window
 
     def start(with_feedback: bool, state: dict[str, Any] | None):
-        model, parts = build(p, d, feedback=with_feedback, wake=wake)
+        model, parts = build(p, d, feedback=with_feedback, wake=wake, controls=controls)
         system = System(model)
         integ = integrator(system, p, h, parts)
         if state is not None:  # the same layout: continue exactly
@@ -758,12 +776,18 @@ def simulate(p: Parameters) -> xr.Dataset:
                      hint=hint, window=p.extrapolation_window,
                      before_recording=remove_feedback if feedback and not done else None)
 
+    def ramp() -> None:  # march a change of the controls in, before shooting
+        while integ.t < controls.t0 + controls.duration - 0.5 * h:
+            step()
+
+    ramp()
     rec = periodic_response()
     transient = rec.transient
-    if wake is not None:
+    corrections = 0
+    while True:  # the periodic response at the trimmed controls (once if not trimming)
         # the wake and the response, each the fixed point of the other: update the wake from
         # the recorded revolution and find the periodic response again, until it settles
-        while wake.update(accelerate=True) > p.wake_tolerance:
+        while wake is not None and wake.update(accelerate=True) > p.wake_tolerance:
             if wake.updates - p.settle_revolutions >= p.wake_iterations:
                 raise RuntimeError(
                     f"the prescribed wake did not converge in {p.wake_iterations} updates "
@@ -773,6 +797,25 @@ def simulate(p: Parameters) -> xr.Dataset:
             report(f"wake update {wake.updates}: change {wake.change:.3g}")
             transient += rec.transient + p.revolutions
             rec = periodic_response()
+        if trimmer is None:
+            break
+        # the trim residuals of the periodic response; if off, a Broyden step on the
+        # controls, ramped in, and the periodic response again from where the model is
+        res, trimmed = trim.update(trimmer, controls, rec.samples, _Sampler.COLUMNS, nrev,
+                                   integ.t, periodic=True)
+        if trimmed:
+            break
+        if corrections == trim.MAX_CORRECTIONS:
+            raise RuntimeError(
+                f"trim = {p.trim}: not trimmed after {corrections} corrections of the periodic "
+                f"response: {trim.describe(trimmer, res)} at "
+                f"{trim.controls_degrees(controls.controls)}")
+        corrections += 1
+        done.append(integ)  # rebuilt: the shaft tilt may have changed
+        integ, sampler, parts, system = start(False, integ.state())
+        ramp()
+        transient += rec.transient + p.revolutions + 1
+        rec = periodic_response()
     for i in [*done, integ]:
         steps += i.n_steps
         iterations += i.n_iterations
@@ -783,6 +826,9 @@ def simulate(p: Parameters) -> xr.Dataset:
     thrust = float(col["thrust"].mean())
     disk = math.pi * UH60A.radius**2
     ct = thrust / (p.air_density * disk * (omega * UH60A.radius) ** 2)
+    flown = controls.controls
+    deg = (np.degrees(flown) if trimmer is not None
+           else (p.collective, p.cyclic_cosine, p.cyclic_sine, p.shaft_tilt))
     series = {
         "time": t,
         "bifilar": np.arange(N_BIFILARS),
@@ -825,11 +871,15 @@ def simulate(p: Parameters) -> xr.Dataset:
         "fuselage_damping": np.float64(parts.fuselage_damping),
         "run_wake_updates": np.int32(0 if wake is None else wake.updates),
         "run_wake_change": np.float64(0.0 if wake is None else wake.change),
-        # the controls flown: today the parameters themselves
-        "control_collective": np.float64(p.collective),
-        "control_cyclic_sine": np.float64(p.cyclic_sine),
-        "control_cyclic_cosine": np.float64(p.cyclic_cosine),
-        "control_shaft_tilt": np.float64(p.shaft_tilt),
+        # the controls flown: the parameters', or the trim's
+        "control_collective": np.float64(deg[0]),
+        "control_cyclic_sine": np.float64(deg[2]),
+        "control_cyclic_cosine": np.float64(deg[1]),
+        "control_shaft_tilt": np.float64(deg[3]),
+        **trim.facts(trimmer, ct / UH60A.solidity,
+                     None if trimmer is None else trim.measure(
+                         data, _Sampler.COLUMNS, omega, nrev, trimmer.thrust_scale),
+                     flown),
         # over whole revolutions the kinetic and strain energies repeat, so the mean shaft
         # power is what the air, the dampers and the pitch links take (tests/studies/
         # test_rotor_outputs.py checks it against the airloads' power)
@@ -878,6 +928,7 @@ def turning(system: System, parts: RotorParts, omega: float) -> TurningParts:
 
 def _check(p: Parameters) -> None:
     periodic.check(p)
+    trim.check(p)
     holes_for(p)
     if p.shooting_window and p.steps_per_rev % N_BLADES:
         raise ParameterError(f"steps_per_rev = {p.steps_per_rev}: must be a multiple of "
@@ -888,4 +939,4 @@ def _check(p: Parameters) -> None:
 SPEC = ModelSpec("rotor", PARAMETERS, simulate, _check,
                  description="four-bladed elastic UH-60 rotor with aerodynamics and four "
                              "bifilars on a fuselage-beam",
-                 outputs=OUTPUTS, version="4")
+                 outputs=OUTPUTS, version="5")
