@@ -98,6 +98,7 @@ THRUST_TOLERANCE = 2.5e-3  # relative (C_T/σ or the vertical force; the propuls
 FLAPPING_TOLERANCE = 0.025  # degree (propulsive: its hub moment's equivalent flapping)
 MAX_CORRECTIONS = 4  # control corrections after the first periodic response
 RAMP = 0.25  # of a revolution: the control change's ramp
+SETTLE_RELAXATION = 0.6  # of a Newton step from a settling revolution
 SETTLE_WINDOW = 0.5  # of a settling revolution, measured (its end)
 MAX_STEP = math.radians(3.0)  # rad: largest change of a control in one update
 
@@ -207,9 +208,10 @@ class RigidRotor:
     advancing at 90°), pitch θ = θ0 + θtw r + θc cos ψ + θs sin ψ, lift between the root
     cut-out x0 and the tip-loss station B. The flap equation β'' + ν² β = γ M_F with
     M_F = ½ ∫ r (U_T² θ − U_P U_T) dr (the aerodynamic flap moment on I_β Ω², γ the Lock
-    number) is balanced on its mean and first harmonics, and
+    number) is balanced on its mean and first ``harmonics`` harmonics, and
     C_T/σ = (a/2) ⟨∫ (U_T² θ − U_P U_T) dr⟩. The integrals are evaluated by quadrature that is
-    exact for these polynomials (Gauss in r, 16 azimuths), so the result is the closed form's:
+    exact for these polynomials (Gauss in r, 4K + 12 azimuths), so the result is the closed
+    form's:
     with ν = 1, x0 = 0, B = 1 and zero flapping, e.g. C_T/σ = (a/2)[θ0(1/3 + μ²/2) +
     θtw(1 + μ²)/4 + μθs/2 − λ/2].
 
@@ -227,6 +229,9 @@ class RigidRotor:
         Root cut-out x0 and tip-loss factor B, on R.
     twist
         Linear twist θtw, rad (tip less root).
+    harmonics
+        Flapping harmonics kept (1: the classical closed form's truncation; more: the same
+        equations without it, the higher harmonics of β feeding back through μ β cos ψ).
     """
 
     lift_slope: float
@@ -236,38 +241,47 @@ class RigidRotor:
     root: float = 0.0
     tip: float = 1.0
     twist: float = 0.0
+    harmonics: int = 1
 
     def _loads(self, theta: Array, beta: Array, mu: float, lam: float
-               ) -> tuple[Array, Array]:
-        """M_F(ψ) and the thrust integrand ∫(U_T²θ − U_P U_T)dr at 16 azimuths."""
+               ) -> tuple[Array, Array, Array]:
+        """M_F(ψ) and the thrust integrand ∫(U_T²θ − U_P U_T)dr at the azimuths ψ (also
+        returned) for flapping coefficients ``beta`` (β0, β1c, β1s, β2c, …)."""
         xg, wg = np.polynomial.legendre.leggauss(4)
         r = 0.5 * (self.tip + self.root) + 0.5 * (self.tip - self.root) * xg
         w = 0.5 * (self.tip - self.root) * wg
-        psi = 2 * np.pi * np.arange(16) / 16
+        k = self.harmonics
+        psi = 2 * np.pi * np.arange(4 * k + 12) / (4 * k + 12)  # exact for these products
         cs, sn = np.cos(psi)[:, None], np.sin(psi)[:, None]
         th = theta[0] + self.twist * r + theta[1] * cs + theta[2] * sn
-        b = beta[0] + beta[1] * cs + beta[2] * sn
-        db = -beta[1] * sn + beta[2] * cs  # dβ/dψ
+        n = np.arange(1, k + 1)
+        c_n, s_n = np.cos(np.outer(psi, n)), np.sin(np.outer(psi, n))
+        b = (beta[0] + c_n @ beta[1::2] + s_n @ beta[2::2])[:, None]
+        db = (-s_n @ (n * beta[1::2]) + c_n @ (n * beta[2::2]))[:, None]  # dβ/dψ
         ut = r + mu * sn
         up = lam + r * db + mu * b * cs
         f = ut * ut * th - up * ut
-        return 0.5 * (f * r) @ w, f @ w
+        return 0.5 * (f * r) @ w, f @ w, psi
 
     def response(self, theta: Array, mu: float, lam: float) -> tuple[float, Array]:
-        """C_T/σ and the flapping (β0, β1c, β1s) (rad) at controls ``theta`` = (θ0, θc, θs)
-        (rad), advance ratio ``mu`` and uniform inflow ``lam`` (down through the disk, on
-        ΩR)."""
+        """C_T/σ and the flapping (β0, β1c, β1s, then the higher harmonics kept) (rad) at
+        controls ``theta`` = (θ0, θc, θs) (rad), advance ratio ``mu`` and uniform inflow
+        ``lam`` (down through the disk, on ΩR)."""
         theta = np.asarray(theta, dtype=float)
-        psi = 2 * np.pi * np.arange(16) / 16
-        proj = np.array([np.full(16, 1 / 16), 2 * np.cos(psi) / 16, 2 * np.sin(psi) / 16])
+        k = self.harmonics
+        psi = self._loads(theta, np.zeros(2 * k + 1), mu, lam)[2]
+        n = np.arange(1, k + 1)
+        proj = np.vstack([np.full(len(psi), 1 / len(psi)),
+                          *[row for j in n for row in (2 * np.cos(j * psi) / len(psi),
+                                                       2 * np.sin(j * psi) / len(psi))]])
         nu2 = self.flap_frequency**2
-        lhs = np.diag([nu2, nu2 - 1.0, nu2 - 1.0])
+        lhs = np.diag([nu2, *np.repeat(nu2 - n**2, 2)])
 
-        def balance(beta: Array) -> Array:  # ν²β0 − γ⟨M_F⟩, (ν² − 1)β1 − γ 2⟨M_F (c, s)⟩
+        def balance(beta: Array) -> Array:  # (ν² − n²) β_n − γ (its harmonic of M_F)
             return lhs @ beta - self.lock * (proj @ self._loads(theta, beta, mu, lam)[0])
 
-        r0 = balance(np.zeros(3))
-        jac = np.column_stack([balance(e) - r0 for e in np.eye(3)])
+        r0 = balance(np.zeros(2 * k + 1))
+        jac = np.column_stack([balance(e) - r0 for e in np.eye(2 * k + 1)])
         beta = np.linalg.solve(jac, -r0)
         ct = 0.5 * self.lift_slope * float(np.mean(self._loads(theta, beta, mu, lam)[1]))
         return ct, beta
@@ -407,7 +421,9 @@ class Trimmer:
             jac = self.jacobian
         else:
             jac = self.model_jacobian(x)
-        dx = -np.linalg.solve(jac, r)
+        # a settling revolution's residuals still carry the transient of the last change
+        # (the inflow's lag above all), which a full step would chase: it is relaxed
+        dx = -np.linalg.solve(jac, r) * (1.0 if periodic else SETTLE_RELAXATION)
         biggest = np.max(np.abs(dx))
         if biggest > MAX_STEP:  # a bounded step: the closed form is a linear guide
             dx *= MAX_STEP / biggest
