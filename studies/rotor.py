@@ -54,7 +54,8 @@ delayed feedback over one revolution (:func:`lag_feedback_gains`, damping ratio
 
 Besides the loads, each case archives the controls flown, the shaft power (the drive's
 moment about the shaft axis, mean × Ω), blade 0's flap angle and its first harmonics, and the
-in-plane hub moments at the fuselage-beam's top (:data:`OUTPUTS`).
+in-plane hub moments at the fuselage-beam's top (:data:`OUTPUTS`). With ``trim`` the controls
+are found with the periodic response (:mod:`studies.trim`).
 
 ``docs/models.md`` gives the assumptions, the defaults and the measured accuracy.
 """

@@ -291,7 +291,8 @@ def test_uh60_propulsive_trim():
     # the shaft tilts forward by about the drag-to-weight angle plus the H-force's: D/W =
     # 0.043 (2.4°), measured 3.1°
     assert math.degrees(math.atan(drag / p.gross_weight)) < float(ds.control_shaft_tilt) < 5.0
-    assert float(ds.run_simulated_revolutions) <= 2.2 * UNTRIMMED_REVOLUTIONS
+    # measured 28.5 revolutions against the untrimmed 15.5
+    assert float(ds.run_simulated_revolutions) <= 2 * UNTRIMMED_REVOLUTIONS
 
 
 @pytest.mark.slow
