@@ -777,9 +777,13 @@ def simulate(p: Parameters) -> xr.Dataset:
                      hint=hint, window=p.extrapolation_window,
                      before_recording=remove_feedback if feedback and not done else None)
 
+    ramped = 0  # steps marched to ramp control changes in
+
     def ramp() -> None:  # march a change of the controls in, before shooting
+        nonlocal ramped
         while integ.t < controls.t0 + controls.duration - 0.5 * h:
             step()
+            ramped += 1
 
     ramp()
     rec = periodic_response()
@@ -815,7 +819,7 @@ def simulate(p: Parameters) -> xr.Dataset:
         done.append(integ)  # rebuilt: the shaft tilt may have changed
         integ, sampler, parts, system = start(False, integ.state())
         ramp()
-        transient += rec.transient + p.revolutions + 1
+        transient += rec.transient + p.revolutions
         rec = periodic_response()
     for i in [*done, integ]:
         steps += i.n_steps
@@ -860,7 +864,8 @@ def simulate(p: Parameters) -> xr.Dataset:
     facts = {
         **periodic.run_facts(
             rec, hub_speed=omega, revolutions=p.revolutions, samples_per_rev=nrev,
-            transient=transient + p.settle_revolutions, simulated=steps / nrev,
+            transient=transient + p.settle_revolutions + math.ceil(ramped / nrev),
+            simulated=steps / nrev,
             steps=steps, iterations=iterations, seconds=time.perf_counter() - t0),
         "run_unknowns": np.int32(system.n),
         "tuning_order_linear": np.float64(d.holes.order_linear),
@@ -888,7 +893,10 @@ def simulate(p: Parameters) -> xr.Dataset:
         "flapping_cosine": np.float64(flap.cos[1]),
         "flapping_sine": np.float64(flap.sin[1]),
     }
-    ds = SPEC.dataset({**series, **facts}, {"message": rec.note})
+    note = rec.note
+    if trimmer is not None:
+        note = "; ".join(filter(None, [note, f"trimmed in {trimmer.updates} control updates"]))
+    ds = SPEC.dataset({**series, **facts}, {"message": note})
     return ds
 
 

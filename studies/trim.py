@@ -3,9 +3,10 @@
 ``trim = "none"`` flies the parameters' controls (the paper's). The other two find controls:
 
 * ``wind_tunnel`` — collective θ0 and the cyclics θc, θs such that the blade loading C_T/σ
-  equals ``thrust_coefficient`` and blade 0's first-harmonic flapping relative to the shaft is
-  zero (β1c = β1s = 0: the tip-path plane perpendicular to the shaft), at the given
-  ``shaft_tilt``;
+  equals ``thrust_coefficient_target`` and blade 0's first-harmonic flapping relative to the
+  shaft is zero (β1c = β1s = 0: the tip-path plane perpendicular to the shaft), at the given
+  ``shaft_tilt``. (The target is not named ``thrust_coefficient``: the archive already holds
+  that output, the achieved C_T; the achieved C_T/σ is ``thrust_coefficient_achieved``.)
 * ``propulsive`` — θ0, θc, θs and the shaft tilt α_s such that the rotor's mean force carries
   ``gross_weight`` W and overcomes the parasite drag D = ½ ρ U² ``flat_plate_area``, with zero
   mean hub pitch and roll moments. A simplification of a whole aircraft: the rotor alone
@@ -51,15 +52,16 @@ FT2 = 0.09290304  # m²
 
 PARAMETERS: dict[str, Param] = {
     "trim": Param("none", "1", "trim: none (fly the controls given), wind_tunnel (collective "
-                  "and cyclics for the C_T/σ of thrust_coefficient and zero first-harmonic "
-                  "flapping at the given shaft_tilt) or propulsive (collective, cyclics and "
-                  "shaft tilt for a rotor carrying gross_weight against the parasite drag of "
-                  "flat_plate_area with zero hub moments; no tail rotor, no fuselage moments)",
+                  "and cyclics for the C_T/σ of thrust_coefficient_target and zero "
+                  "first-harmonic flapping at the given shaft_tilt) or propulsive (collective, "
+                  "cyclics and shaft tilt for a rotor carrying gross_weight against the "
+                  "parasite drag of flat_plate_area with zero hub moments; no tail rotor, no "
+                  "fuselage moments)",
                   choices=TRIMS),
-    "thrust_coefficient": Param(0.08, "1", "wind_tunnel trim's target blade loading C_T/σ "
-                                "(thrust coefficient over solidity; the UH-60A Airloads "
-                                "counters fly about 0.08); unused otherwise",
-                                minimum=0.02, maximum=0.14),
+    "thrust_coefficient_target": Param(
+        0.08, "1", "wind_tunnel trim's target blade loading C_T/σ (thrust coefficient over "
+        "solidity; the UH-60A Airloads counters fly about 0.08); unused otherwise",
+        minimum=0.02, maximum=0.14),
     # UH-60A "loaded" weight 7,375 kg (16,260 lb): the Black Hawk's published general
     # characteristics (max take-off 24,500 lb); 9.80665 m/s² → 72.3 kN
     "gross_weight": Param(72.3e3, "N", "propulsive trim's gross weight W the rotor carries "
