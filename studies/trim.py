@@ -336,7 +336,8 @@ class Trimmer:
     target
         ``wind_tunnel``: the target C_T/σ. ``propulsive``: (W, D) in N.
     thrust_scale
-        ``propulsive``: ρ π R² (ΩR)² σ (N per unit C_T/σ), for the force rows.
+        ρ π R² (ΩR)² σ: thrust (N) per unit C_T/σ (the measured thrust's scale, and the
+        propulsive trim's force rows).
     moment_scale
         ``propulsive``: the hub moment (N·m) per radian of first-harmonic flapping,
         (N_b/2) e C for hinge offset e and blade centrifugal force C (the in-plane moment the
@@ -356,6 +357,7 @@ class Trimmer:
         self.thrust_scale, self.moment_scale, self.induced = thrust_scale, moment_scale, induced
         self.n = 3 if kind == "wind_tunnel" else 4
         self.updates = 0
+        self._tilt = 0.0  # the shaft tilt of the wind-tunnel trim's Jacobian (rad)
         self.jacobian: Array | None = None  # the Broyden-updated one, once periodic
         self.last: tuple[Array, Array] | None = None  # (controls, residual) of the last periodic
 
@@ -548,7 +550,7 @@ def for_rotor(p: Parameters, blades: int = 4) -> Trimmer | None:
     # each blade's centrifugal force C = Ω² (S_β + e m_b), at the hinge offset e
     pull = omega**2 * (UH60A.blade_first_moment + UH60A.hinge_radius * UH60A.blade_mass)
     if p.trim == "wind_tunnel":
-        target: float | tuple[float, float] = p.thrust_coefficient
+        target: float | tuple[float, float] = p.thrust_coefficient_target
     else:
         target = (p.gross_weight,
                   0.5 * p.air_density * p.flight_speed**2 * p.flat_plate_area)
