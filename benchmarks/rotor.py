@@ -3,6 +3,7 @@
     PYTHONPATH=. python benchmarks/rotor.py --revolutions 2 [--bifilar free] [--scheme ed]
                                              [--inflow prescribed_wake] [--profile]
     PYTHONPATH=. python benchmarks/rotor.py --case [--bifilar free]     # one whole case
+    PYTHONPATH=. python benchmarks/rotor.py --case --trim wind_tunnel   # trimmed, and untrimmed
     PYTHONPATH=. python benchmarks/rotor.py --wake-update               # one wake update
 
 The first form builds the model with its defaults (``--steps-per-rev`` to change them), marches
@@ -10,9 +11,12 @@ The first form builds the model with its defaults (``--steps-per-rev`` to change
 revolution, steps per second and Newton iterations per step; ``--profile`` runs the loop under
 pyinstrument and prints the profile (the modules that take the time). The second runs one case
 as the sweep does (settling, marching until periodic, recording) and prints its wall time,
-revolutions and Newton iterations per step (and, with the prescribed wake, its updates). The
-third times one update of the prescribed wake (Biot–Savart over the revolution's azimuths at
-blade 0's sections) at the model's wake parameters.
+revolutions and Newton iterations per step (and, with the prescribed wake, its updates); with
+``--trim`` it runs the case trimmed and untrimmed and prints both, the trim's control updates,
+its residuals and the revolutions' ratio (``--coarse``: the coarse case of the tests, 120
+steps/rev, 3 elements, 3 settling revolutions, periodic to 5 %). The third times one update
+of the prescribed wake (Biot–Savart over the revolution's azimuths at blade 0's sections) at
+the model's wake parameters.
 """
 
 from __future__ import annotations
@@ -61,13 +65,21 @@ def per_case(p: Parameters) -> dict:
     ds = run(p)
     wall = time.perf_counter() - t0
     revs = ds["run_simulated_revolutions"].item()
-    return {"bifilar": p.bifilar, "inflow": p.inflow, "wall_s": round(wall, 1),
+    return {"bifilar": p.bifilar, "inflow": p.inflow, "trim": p.trim, "wall_s": round(wall, 1),
             "revolutions": revs, "wake_updates": int(ds["run_wake_updates"].item()),
             "seconds_per_rev": round(wall / revs, 2),
             "newton_per_step": round(
                 ds["run_newton_iterations"].item() / ds["run_steps"].item(), 2),
             "thrust_coefficient_over_solidity": round(
-                ds["thrust_coefficient_over_solidity"].item(), 4)}
+                ds["thrust_coefficient_over_solidity"].item(), 4),
+            "trim_iterations": int(ds["trim_iterations"].item()),
+            "trim_residual_thrust": float(f"{ds['trim_residual_thrust'].item():.3g}"),
+            "flapping_deg": [round(ds["flapping_cosine"].item(), 4),
+                             round(ds["flapping_sine"].item(), 4)],
+            "hub_moment_mean": [round(float(ds[f"hub_moment_{c}_fixed"].mean()), 1)
+                                for c in "xy"],
+            "controls_deg": [round(ds[f"control_{c}"].item(), 3) for c in (
+                "collective", "cyclic_cosine", "cyclic_sine", "shaft_tilt")]}
 
 
 def wake_update(p: Parameters) -> dict:
@@ -92,6 +104,10 @@ def main() -> None:
     a.add_argument("--profile", action="store_true")
     a.add_argument("--inflow", default="peters_he", choices=["peters_he", "prescribed_wake"])
     a.add_argument("--case", action="store_true", help="run one whole case")
+    a.add_argument("--trim", default=None, choices=["wind_tunnel", "propulsive"],
+                   help="with --case: run it trimmed and untrimmed")
+    a.add_argument("--coarse", action="store_true",
+                   help="the coarse case of the tests (120 steps/rev, 3 elements)")
     a.add_argument("--wake-update", action="store_true",
                    help="time one update of the prescribed wake")
     args = a.parse_args()
@@ -100,9 +116,17 @@ def main() -> None:
         given["steps_per_rev"] = args.steps_per_rev
     if args.scheme:
         given["scheme"] = args.scheme
+    if args.coarse:
+        given.update(steps_per_rev=120, blade_elements=3, wake_states=2, settle_revolutions=3,
+                     periodic_tolerance=0.05)
     p = SPEC.validate(given)
     if args.wake_update:
         res = wake_update(SPEC.validate({**given, "inflow": "prescribed_wake"}))
+    elif args.case and args.trim:
+        plain = per_case(p)
+        print(json.dumps(plain))
+        res = per_case(SPEC.validate({**given, "trim": args.trim}))
+        res["revolutions_ratio"] = round(res["revolutions"] / plain["revolutions"], 2)
     elif args.case:
         res = per_case(p)
     else:

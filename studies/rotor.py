@@ -54,7 +54,8 @@ delayed feedback over one revolution (:func:`lag_feedback_gains`, damping ratio
 
 Besides the loads, each case archives the controls flown, the shaft power (the drive's
 moment about the shaft axis, mean × Ω), blade 0's flap angle and its first harmonics, and the
-in-plane hub moments at the fuselage-beam's top (:data:`OUTPUTS`).
+in-plane hub moments at the fuselage-beam's top (:data:`OUTPUTS`). With ``trim`` the controls
+are found with the periodic response (:mod:`studies.trim`).
 
 ``docs/models.md`` gives the assumptions, the defaults and the measured accuracy.
 """
@@ -86,7 +87,7 @@ from solver.symmetry import CyclicSymmetry
 from solver.system import System
 from solver.timefunctions import TimeFunction, linear
 from solver.turning import TurningParts
-from studies import periodic, rotor_wake
+from studies import periodic, rotor_wake, trim
 from studies.absorbers import N_BIFILARS, AbsorberProbe, add_absorbers, holes_for, pin_damping
 from studies.absorbers import OUTPUTS as ABSORBER_OUTPUTS
 from studies.absorbers import PARAMETERS as ABSORBERS
@@ -159,6 +160,7 @@ PARAMETERS: dict[str, Param] = {
                           maximum=100.0),
     "shaft_tilt": Param(3.0, "degree", "forward shaft tilt (free stream blowing down through "
                         "the disk)", minimum=-15.0, maximum=15.0),
+    **trim.PARAMETERS,
     "air_density": Param(1.225, "kg m-3", "air density", minimum=0.1, maximum=2.0),
     "blade_elements": Param(6, "1", "cubic beam elements per blade, hinge to tip", minimum=2,
                             maximum=20),
@@ -279,6 +281,7 @@ OUTPUTS: dict[str, Output] = {
         "N m-1", "in-plane stiffness of the fuselage-beam at the hub, 3 EI / L^3 (EI times "
         "fuselage_bending_stiffness_scale)", dims=()),
     "fuselage_damping": Output("N s m-1", "in-plane damper at the shaft head", dims=()),
+    **trim.OUTPUTS,
     **periodic.RUN_OUTPUTS,
     "run_unknowns": Output("1", "unknowns of the multibody model", dims=()),
     "run_wake_updates": Output("1", "updates of the prescribed wake (0 with Peters–He)",
@@ -349,12 +352,16 @@ def lag_feedback_gains(p: Parameters) -> tuple[float, float, float]:
 
 
 def add_blade(model: Model, hub, k: int, p: Parameters, damping_factor: float = 1.0,
-              feedback: tuple[float, float, float] | None = None
+              feedback: tuple[float, float, float] | None = None,
+              controls: trim.ControlSchedule | None = None
               ) -> tuple[Beam, RelativeRotation]:
     """Blade ``k`` (azimuth kπ/2 at t = 0) on ``hub`` (a body spinning at ``hub_speed`` about
     +z, frame = identity at t = 0): flap, lag and driven pitch revolutes at the hinge, joined
     by massless links, and the lag damper (× ``damping_factor``; with ``feedback``, the gains
-    of :func:`lag_feedback_gains`, also the delayed feedback). Returns (beam, damper)."""
+    of :func:`lag_feedback_gains`, also the delayed feedback). The pitch follows the
+    parameters' controls, or ``controls`` (a trim's schedule; the blade is built at the
+    parameters' pitch either way, so a rebuilt model takes the same state). Returns (beam,
+    damper)."""
     omega = p.hub_speed
     e = section_origin(include_cuff=True)
     r_tw, tw_s = blade_twist("structural")
@@ -365,6 +372,8 @@ def add_blade(model: Model, hub, k: int, p: Parameters, damping_factor: float = 
     pitch = swashplate(math.radians(p.collective), math.radians(p.cyclic_cosine),
                        math.radians(p.cyclic_sine), omega, psi)
     theta_start = pitch.value(0.0)
+    driven = (_shifted(pitch) if controls is None
+              else controls.pitch(psi, reference=theta_start))
 
     def twist(s):  # structural twist, the blade built at its pitch at t = 0
         return np.interp(np.asarray(s) + e, r_tw, tw_s) + theta_start
@@ -386,7 +395,7 @@ def add_blade(model: Model, hub, k: int, p: Parameters, damping_factor: float = 
               Revolute(f"flap{k}", hub, flap_link, point=hinge, axis=et),
               Revolute(f"lag{k}", flap_link, lag_link, point=hinge, axis=Z),
               Revolute(f"pitch{k}", lag_link, blade.root, point=hinge, axis=er,
-                       driven=_shifted(pitch)))
+                       driven=driven))
     if p.lag_damping > 0 or damper.feedback:
         model.add(damper)
     return blade, damper
@@ -469,12 +478,14 @@ def design(p: Parameters) -> RotorDesign:
 
 
 def build(p: Parameters, d: RotorDesign | None = None, damping_factor: float = 1.0,
-          feedback: bool = False, wake: RotorWake | None = None) -> tuple[Model, RotorParts]:
+          feedback: bool = False, wake: RotorWake | None = None,
+          controls: trim.ControlSchedule | None = None) -> tuple[Model, RotorParts]:
     """The rotor model for parameters ``p`` and their derived design ``d`` (default
     :func:`design`'s); ``damping_factor`` multiplies the lag and fuselage dampers (settling
     phase), ``feedback`` adds the delayed lag feedback (marching to the periodic response).
     With ``inflow = "prescribed_wake"`` the blades see ``wake``'s winds (a new
-    :class:`~studies.rotor_wake.RotorWake` if none is given) instead of Peters–He states."""
+    :class:`~studies.rotor_wake.RotorWake` if none is given) instead of Peters–He states.
+    ``controls``: a trim's control schedule (pitch and shaft tilt) instead of the parameters'."""
     omega = p.hub_speed
     d = design(p) if d is None else d
     holes = d.holes
@@ -503,8 +514,8 @@ def build(p: Parameters, d: RotorDesign | None = None, damping_factor: float = 1
     # value, as in studies.hub, keeps the driven rotation well conditioned)
     model.add(hub, Revolute("rotor", shaft, hub, axis=Z, driven=linear(omega)))
     # ---- blades, aerodynamics
-    flight = FlightCondition(p.flight_speed, math.radians(p.shaft_tilt),
-                             p.air_density)
+    tilt = math.radians(p.shaft_tilt) if controls is None else controls.shaft_tilt
+    flight = FlightCondition(p.flight_speed, tilt, p.air_density)
     m = p.inflow_harmonics
     # a first guess of the thrust coefficient starts the inflow near its level
     inflow = DynamicInflow("inflow", flight, UH60A.radius, omega, model="peters-he",
@@ -515,7 +526,7 @@ def build(p: Parameters, d: RotorDesign | None = None, damping_factor: float = 1
     blades, lines = [], []
     for k in range(N_BLADES):
         blade, _ = add_blade(model, hub, k, p, damping_factor,
-                             d.lag_feedback if feedback else None)
+                             d.lag_feedback if feedback else None, controls)
         if p.inflow == "prescribed_wake" and wake is None:
             wake = new_wake(p, airloads(blade, k, p, flight, None))
         wind = None if wake is None else wake.winds[k]
@@ -646,29 +657,35 @@ def integrator(system: System, p: Parameters, h: float, parts: RotorParts | None
                            book_work=book_work, turning=spin, tolerance_scale=scale)
 
 
-def _settle(p: Parameters, d: RotorDesign, h: float, wake: RotorWake | None
+def _settle(p: Parameters, d: RotorDesign, h: float, wake: RotorWake | None,
+            controls: trim.ControlSchedule | None = None, trimmer: trim.Trimmer | None = None
             ) -> tuple[dict[str, Any], int, int]:
     """March ``settle_revolutions`` with the lag and fuselage dampers multiplied by a factor
     that falls geometrically from ``settle_damping_factor`` towards 1, one value per
     revolution (each step down changes the forced response a little, so the transient it
-    starts is small), updating the prescribed ``wake`` (if any) after each; returns
+    starts is small), updating the prescribed ``wake`` (if any) and the ``trimmer``'s controls
+    (if any) after each; returns
     (integrator state to continue from, steps, Newton iterations)."""
     n, big = p.settle_revolutions, p.settle_damping_factor
     state = None
     steps = iterations = 0
     for rev in range(n):
         factor = big ** (1.0 - rev / n)
-        model, parts = build(p, d, damping_factor=factor, wake=wake)
+        model, parts = build(p, d, damping_factor=factor, wake=wake, controls=controls)
         system = System(model)
         integ = integrator(system, p, h, parts)
         if state is not None:
             integ.restore(state)
         step = stepper(integ, p.hub_speed)
-        sample = _Sampler(system, parts) if wake is not None else None
+        sample = _Sampler(system, parts) if wake is not None or trimmer else None
+        rows = []
         for _ in range(p.steps_per_rev):
             step()
             if sample is not None:
-                sample(integ)
+                rows.append(sample(integ))
+        if trimmer is not None and controls is not None:  # a Newton step on the controls
+            trim.update(trimmer, controls, np.array(rows), _Sampler.COLUMNS, p.steps_per_rev,
+                        integ.t, periodic=False)
         if wake is not None:
             report(f"wake update {wake.updates + 1}: change {wake.update():.3g}")
         state = integ.state()
@@ -696,13 +713,15 @@ def simulate(p: Parameters) -> xr.Dataset:
     settled = None
     # the prescribed wake (if any), shared by every model built below
     wake = build(p, d)[1].wake
+    # the controls flown (a trim changes them as the response settles) and the trim, if any
+    controls, trimmer = trim.schedule(p), trim.for_rotor(p)
     if p.settle_revolutions and p.settle_damping_factor != 1.0:
-        settled, steps, iterations = _settle(p, d, h, wake)
+        settled, steps, iterations = _settle(p, d, h, wake, controls, trimmer)
     # a restart cannot carry the delay line of the lag feedback: shooting replaces it
     feedback = p.lag_feedback > 0 and not p.shooting_window
 
     def start(with_feedback: bool, state: dict[str, Any] | None):
-        model, parts = build(p, d, feedback=with_feedback, wake=wake)
+        model, parts = build(p, d, feedback=with_feedback, wake=wake, controls=controls)
         system = System(model)
         integ = integrator(system, p, h, parts)
         if state is not None:  # the same layout: continue exactly
@@ -753,12 +772,22 @@ def simulate(p: Parameters) -> xr.Dataset:
                      hint=hint, window=p.extrapolation_window,
                      before_recording=remove_feedback if feedback and not done else None)
 
+    ramped = 0  # steps marched to ramp control changes in
+
+    def ramp() -> None:  # march a change of the controls in, before shooting
+        nonlocal ramped
+        while integ.t < controls.t0 + controls.duration - 0.5 * h:
+            step()
+            ramped += 1
+
+    ramp()
     rec = periodic_response()
     transient = rec.transient
-    if wake is not None:
+    corrections = 0
+    while True:  # the periodic response at the trimmed controls (once if not trimming)
         # the wake and the response, each the fixed point of the other: update the wake from
         # the recorded revolution and find the periodic response again, until it settles
-        while wake.update(accelerate=True) > p.wake_tolerance:
+        while wake is not None and wake.update(accelerate=True) > p.wake_tolerance:
             if wake.updates - p.settle_revolutions >= p.wake_iterations:
                 raise RuntimeError(
                     f"the prescribed wake did not converge in {p.wake_iterations} updates "
@@ -768,6 +797,25 @@ def simulate(p: Parameters) -> xr.Dataset:
             report(f"wake update {wake.updates}: change {wake.change:.3g}")
             transient += rec.transient + p.revolutions
             rec = periodic_response()
+        if trimmer is None:
+            break
+        # the trim residuals of the periodic response; if off, a Broyden step on the
+        # controls, ramped in, and the periodic response again from where the model is
+        res, trimmed = trim.update(trimmer, controls, rec.samples, _Sampler.COLUMNS, nrev,
+                                   integ.t, periodic=True)
+        if trimmed:
+            break
+        if corrections == trim.MAX_CORRECTIONS:
+            raise RuntimeError(
+                f"trim = {p.trim}: not trimmed after {corrections} corrections of the periodic "
+                f"response: {trim.describe(trimmer, res)} at "
+                f"{trim.controls_degrees(controls.controls)}")
+        corrections += 1
+        done.append(integ)  # rebuilt: the shaft tilt may have changed
+        integ, sampler, parts, system = start(False, integ.state())
+        ramp()
+        transient += rec.transient + p.revolutions
+        rec = periodic_response()
     for i in [*done, integ]:
         steps += i.n_steps
         iterations += i.n_iterations
@@ -778,6 +826,9 @@ def simulate(p: Parameters) -> xr.Dataset:
     thrust = float(col["thrust"].mean())
     disk = math.pi * UH60A.radius**2
     ct = thrust / (p.air_density * disk * (omega * UH60A.radius) ** 2)
+    flown = controls.controls
+    deg = (np.degrees(flown) if trimmer is not None
+           else (p.collective, p.cyclic_cosine, p.cyclic_sine, p.shaft_tilt))
     series = {
         "time": t,
         "bifilar": np.arange(N_BIFILARS),
@@ -808,7 +859,8 @@ def simulate(p: Parameters) -> xr.Dataset:
     facts = {
         **periodic.run_facts(
             rec, hub_speed=omega, revolutions=p.revolutions, samples_per_rev=nrev,
-            transient=transient + p.settle_revolutions, simulated=steps / nrev,
+            transient=transient + p.settle_revolutions + math.ceil(ramped / nrev),
+            simulated=steps / nrev,
             steps=steps, iterations=iterations, seconds=time.perf_counter() - t0),
         "run_unknowns": np.int32(system.n),
         "tuning_order_linear": np.float64(d.holes.order_linear),
@@ -820,11 +872,15 @@ def simulate(p: Parameters) -> xr.Dataset:
         "fuselage_damping": np.float64(parts.fuselage_damping),
         "run_wake_updates": np.int32(0 if wake is None else wake.updates),
         "run_wake_change": np.float64(0.0 if wake is None else wake.change),
-        # the controls flown: today the parameters themselves
-        "control_collective": np.float64(p.collective),
-        "control_cyclic_sine": np.float64(p.cyclic_sine),
-        "control_cyclic_cosine": np.float64(p.cyclic_cosine),
-        "control_shaft_tilt": np.float64(p.shaft_tilt),
+        # the controls flown: the parameters', or the trim's
+        "control_collective": np.float64(deg[0]),
+        "control_cyclic_sine": np.float64(deg[2]),
+        "control_cyclic_cosine": np.float64(deg[1]),
+        "control_shaft_tilt": np.float64(deg[3]),
+        **trim.facts(trimmer, ct / UH60A.solidity,
+                     None if trimmer is None else trim.measure(
+                         data, _Sampler.COLUMNS, omega, nrev, trimmer.thrust_scale),
+                     flown),
         # over whole revolutions the kinetic and strain energies repeat, so the mean shaft
         # power is what the air, the dampers and the pitch links take (tests/studies/
         # test_rotor_outputs.py checks it against the airloads' power)
@@ -832,7 +888,10 @@ def simulate(p: Parameters) -> xr.Dataset:
         "flapping_cosine": np.float64(flap.cos[1]),
         "flapping_sine": np.float64(flap.sin[1]),
     }
-    ds = SPEC.dataset({**series, **facts}, {"message": rec.note})
+    note = rec.note
+    if trimmer is not None:
+        note = "; ".join(filter(None, [note, f"trimmed in {trimmer.updates} control updates"]))
+    ds = SPEC.dataset({**series, **facts}, {"message": note})
     return ds
 
 
@@ -873,6 +932,7 @@ def turning(system: System, parts: RotorParts, omega: float) -> TurningParts:
 
 def _check(p: Parameters) -> None:
     periodic.check(p)
+    trim.check(p)
     holes_for(p)
     if p.shooting_window and p.steps_per_rev % N_BLADES:
         raise ParameterError(f"steps_per_rev = {p.steps_per_rev}: must be a multiple of "
@@ -883,4 +943,4 @@ def _check(p: Parameters) -> None:
 SPEC = ModelSpec("rotor", PARAMETERS, simulate, _check,
                  description="four-bladed elastic UH-60 rotor with aerodynamics and four "
                              "bifilars on a fuselage-beam",
-                 outputs=OUTPUTS, version="4")
+                 outputs=OUTPUTS, version="5")
