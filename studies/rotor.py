@@ -273,7 +273,7 @@ OUTPUTS: dict[str, Output] = {
     "flapping_cosine": Output("degree", "blade 0 longitudinal flapping β1c (on cos ψ)",
                               dims=()),
     "flapping_sine": Output("degree", "blade 0 lateral flapping β1s (on sin ψ)", dims=()),
-    "thrust_coefficient": Output("1", "thrust coefficient C_T = T / (ρ π R² (Ω R)²), mean "
+    "rotor_thrust_coefficient": Output("1", "thrust coefficient C_T = T / (ρ π R² (Ω R)²), mean "
                                  "over the recorded revolutions", dims=()),
     "thrust_coefficient_over_solidity": Output("1", "blade loading C_T/σ", dims=()),
     "advance_ratio": Output("1", "advance ratio μ = U / (Ω R)", dims=()),
@@ -865,7 +865,7 @@ def simulate(p: Parameters) -> xr.Dataset:
         "run_unknowns": np.int32(system.n),
         "tuning_order_linear": np.float64(d.holes.order_linear),
         "pin_damping": np.float64(d.pin_damping),
-        "thrust_coefficient": np.float64(ct),
+        "rotor_thrust_coefficient": np.float64(ct),
         "thrust_coefficient_over_solidity": np.float64(ct / UH60A.solidity),
         "advance_ratio": np.float64(p.flight_speed / (omega * UH60A.radius)),
         "effective_fuselage_stiffness": np.float64(parts.fuselage_stiffness),

@@ -3,10 +3,9 @@
 ``trim = "none"`` flies the parameters' controls (the paper's). The other two find controls:
 
 * ``wind_tunnel`` — collective θ0 and the cyclics θc, θs such that the blade loading C_T/σ
-  equals ``thrust_coefficient_target`` and blade 0's first-harmonic flapping relative to the
+  equals ``thrust_coefficient`` and blade 0's first-harmonic flapping relative to the
   shaft is zero (β1c = β1s = 0: the tip-path plane perpendicular to the shaft), at the given
-  ``shaft_tilt``. (The target is not named ``thrust_coefficient``: the archive already holds
-  that output, the achieved C_T; the achieved C_T/σ is ``thrust_coefficient_achieved``.)
+  ``shaft_tilt``; the achieved C_T/σ is ``thrust_coefficient_achieved``.
 * ``propulsive`` — θ0, θc, θs and the shaft tilt α_s such that the rotor's mean force carries
   ``gross_weight`` W and overcomes the parasite drag D = ½ ρ U² ``flat_plate_area``, with zero
   mean hub pitch and roll moments. A simplification of a whole aircraft: the rotor alone
@@ -52,13 +51,13 @@ FT2 = 0.09290304  # m²
 
 PARAMETERS: dict[str, Param] = {
     "trim": Param("none", "1", "trim: none (fly the controls given), wind_tunnel (collective "
-                  "and cyclics for the C_T/σ of thrust_coefficient_target and zero "
+                  "and cyclics for the C_T/σ of thrust_coefficient and zero "
                   "first-harmonic flapping at the given shaft_tilt) or propulsive (collective, "
                   "cyclics and shaft tilt for a rotor carrying gross_weight against the "
                   "parasite drag of flat_plate_area with zero hub moments; no tail rotor, no "
                   "fuselage moments)",
                   choices=TRIMS),
-    "thrust_coefficient_target": Param(
+    "thrust_coefficient": Param(
         0.08, "1", "wind_tunnel trim's target blade loading C_T/σ (thrust coefficient over "
         "solidity; the UH-60A Airloads counters fly about 0.08); unused otherwise",
         minimum=0.02, maximum=0.14),
@@ -550,7 +549,7 @@ def for_rotor(p: Parameters, blades: int = 4) -> Trimmer | None:
     # each blade's centrifugal force C = Ω² (S_β + e m_b), at the hinge offset e
     pull = omega**2 * (UH60A.blade_first_moment + UH60A.hinge_radius * UH60A.blade_mass)
     if p.trim == "wind_tunnel":
-        target: float | tuple[float, float] = p.thrust_coefficient_target
+        target: float | tuple[float, float] = p.thrust_coefficient
     else:
         target = (p.gross_weight,
                   0.5 * p.air_density * p.flight_speed**2 * p.flat_plate_area)

@@ -232,8 +232,8 @@ UNTRIMMED_REVOLUTIONS = 15.5
 def test_bad_trim_input_is_refused():
     with pytest.raises(ParameterError, match="trim"):
         rotor.SPEC.validate({"trim": "free_flight"})
-    with pytest.raises(ParameterError, match="thrust_coefficient_target"):
-        rotor.SPEC.validate({"trim": "wind_tunnel", "thrust_coefficient_target": 0.3})
+    with pytest.raises(ParameterError, match="thrust_coefficient"):
+        rotor.SPEC.validate({"trim": "wind_tunnel", "thrust_coefficient": 0.3})
     with pytest.raises(ParameterError, match="flight_speed"):
         rotor.SPEC.validate({"trim": "propulsive", "flight_speed": 0.0})
     with pytest.raises(ParameterError, match="inflow"):
@@ -244,7 +244,7 @@ def test_bad_trim_input_is_refused():
 
 @pytest.fixture(scope="module")
 def wind_tunnel():
-    return rotor.run({**COARSE, "trim": "wind_tunnel", "thrust_coefficient_target": 0.08})
+    return rotor.run({**COARSE, "trim": "wind_tunnel", "thrust_coefficient": 0.08})
 
 
 @pytest.mark.slow
