@@ -1,34 +1,45 @@
 """The rotor's prescribed vortex wake, iterated with its periodic response.
 
-With ``inflow = "prescribed_wake"`` the rotor's lifting lines see, instead of the Peters–He
-inflow states, the velocity induced at their sections by a prescribed tip-vortex wake
+With ``inflow = "prescribed_wake"`` the induced velocity the rotor's lifting lines see on the
+periodic response is that of a prescribed tip-vortex wake
 (:class:`solver.vortex_wake.TipVortexWake`): each blade trails a tip vortex from
-``wake_release_radius`` along Beddoes' generalized wake (or a rigid skewed helix), of the
-strength of the blade's peak bound circulation when it was trailed, with a Vatistas core of
-``wake_core_radius`` tip chords; the other blades' bound vortices, of the same strength, are
-included. The wake is a lifting-line model's trailed vorticity; the shed wake of each section
-is the Peters finite-state airfoil's, as with Peters–He.
+``wake_release_radius`` (the tip-loss station, where the lifting line's circulation drops to
+zero) along Beddoes' generalized wake (or a rigid skewed helix), of the blade's
+thrust-equivalent circulation when it was trailed, Γ_v ∫ r dr = ∫ Γ r dr over the lifting
+span (so that the far wake carries the rotor's thrust, and a local spike of circulation where
+a vortex passes a blade does not feed the next vortex), with a Vatistas core of
+``wake_core_radius`` tip chords. The other blades' bound vortices, of the same strength, are
+included. The shed wake of each section is the Peters finite-state airfoil's.
 
-The wake is not a state of the multibody model: it is a velocity per section and per azimuth
-(:class:`solver.section_wind.PeriodicWind`, one table for the four blades, each a quarter
-revolution behind the previous one, so that the model keeps its quarter-revolution symmetry),
-computed from the previous revolution of blade 0 — its sections' positions, its tip and its
-circulation at every time step — and updated with under-relaxation ``wake_relaxation``. The
-rotor starts with the wake of its mean thrust coefficient guess (uniform circulation), updates
-it after each settling revolution, then alternates shooting to the periodic response for the
-current wake and updating the wake, until the wake's induced velocity changes by less than
-``wake_tolerance`` of its largest value (the wake and the response are then a fixed point of
-each other).
+How it enters the model. The wake is not a state: it is a velocity per section and per
+azimuth (:class:`solver.section_wind.PeriodicWind`, one table for the four blades, each a
+quarter revolution behind the previous one, so that the model keeps its quarter-revolution
+symmetry). The Peters–He inflow states stay in the model, and the table is the *correction*
+from their periodic inflow to the wake's: v_table = v_wake − v_Peters–He, both from the
+previous revolution. On the periodic response (the fixed point) the sections see exactly the
+wake's velocity; away from it the Peters–He states keep their dynamics, which the rotor's
+stability needs (with the wake as a frozen table alone, and no inflow dynamics, the rotor's
+lag-regressive/fuselage mode is not damped enough to settle). Each section sees the wake's
+velocity averaged over its width (:data:`SUBSECTIONS` points): a vortex passing a blade makes a
+spike that quadrature points would sample, not integrate.
 
-The wake's geometry needs the mean induced inflow (its descent through the disk): that of
-momentum theory (Glauert) for the thrust of the previous revolution.
+The iteration. The first settling revolution runs on Peters–He alone; after each settling
+revolution the table is updated from blade 0's last revolution (its sections' positions, its
+tip, its circulation and the Peters–He inflow at every time step) with under-relaxation
+``wake_relaxation``; then the run alternates shooting to the periodic response for the current
+table and updating it (Anderson-accelerated: :func:`anderson_step`), until the update changes
+the table by less than ``wake_tolerance`` of its largest value. The wake's geometry needs the
+mean induced inflow (its descent through the disk): momentum theory's (Glauert) for the
+thrust of the previous revolution.
 
 Assumptions: the wake is prescribed, not free (no self-induced distortion beyond Beddoes'
-descent law); the tip vortex carries the peak bound circulation (Betz's roll-up of a positively
-loaded blade: a negatively loaded advancing tip's counter-rotating vortex is not modelled); the
-circulation's change along a tip vortex stands for the shed vorticity that would join it
-(not modelled separately); no root vortex (it induces no flow through the disk); the core
-radius is constant with age.
+descent law, no contraction in hover); one rolled-up tip vortex per blade, no inboard trailed
+vorticity and no root vortex (it induces no flow through the disk), and a negatively loaded
+advancing tip's counter-rotating vortex is not modelled; the circulation's change along a tip
+vortex stands for the shed vorticity that would join it; the core radius is constant with age
+and, at one chord, stands for the chordwise averaging that a lifting line (2-D sections at
+the quarter chord) cannot resolve closer to a vortex (thinner cores give blade-vortex spikes
+that no section spacing resolves).
 """
 
 from __future__ import annotations
@@ -49,8 +60,9 @@ Array = NDArray[np.float64]
 INFLOW_MODELS = ("peters_he", "prescribed_wake")
 
 PARAMETERS: dict[str, Param] = {
-    "inflow": Param("peters_he", "1", "rotor inflow model: Peters–He finite states, or a "
-                    "prescribed tip-vortex wake iterated with the periodic response",
+    "inflow": Param("peters_he", "1", "rotor inflow model: Peters–He finite states, or those "
+                    "corrected to the inflow of a prescribed tip-vortex wake iterated with the "
+                    "periodic response",
                     choices=INFLOW_MODELS),
     "wake_turns": Param(4.0, "1", "length of the prescribed wake, in revolutions of age",
                         minimum=0.5, maximum=50.0),
