@@ -53,12 +53,9 @@ def kernels(package: str = "solver") -> dict[str, Any]:
 
 
 def cache_dir(kernel: Any) -> str | None:
-    """The directory where numba caches ``kernel``, or ``None`` if numba does not say.
-
-    numba keeps it in a private attribute: its absence (another numba version) is no error.
-    """
-    cache = getattr(kernel, "_cache", None)
-    return getattr(cache, "cache_path", None)
+    """The directory where numba caches ``kernel`` (``None`` for a kernel it does not
+    cache)."""
+    return kernel.stats.cache_path
 
 
 @contextlib.contextmanager
