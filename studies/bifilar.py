@@ -364,12 +364,13 @@ def compile_kernels(scheme: str = "ep", steps: int = 3) -> None:
 
     A warm-up part (:attr:`ModelSpec.warm_up`) of this model, of :mod:`studies.hub` and of
     :mod:`studies.rotor`: a few steps call every kernel a case calls, the curve sliding and
-    rolling joints' the most expensive to compile (about 10 s of the rotor's 25 s).
+    rolling joints' the most expensive to compile (about 10 s of the rotor's 25 s). The pins
+    are damped, as the hub's and the rotor's are (their dampers have kernels of their own).
     """
     from solver.integrators import make_integrator
     from solver.system import System
 
-    p = SPEC.validate({"scheme": scheme})
+    p = SPEC.validate({"scheme": scheme, "pin_damping": 1.0})
     model, _, parts = build(p)
     h = 2 * np.pi / (parts.holes.order_linear * p.hub_speed) / p.steps_per_period
     integ = make_integrator(System(model), scheme, h)
