@@ -8,7 +8,8 @@ checkout) and times the model's warm-up (``bifilar compile --model MODEL``,
 :func:`pipelines.kernels.warm_up_locally`): its parts on two processes at once (``cold``), in one
 process after the other (``cold_serial``), and again with the cache full (``warm``).
 ``--per-kernel`` compiles the parts in this process and prints the kernels that take the
-longest (numba's compile time of each, less that of the kernels it compiles along).
+longest (numba's compile time of each, less that of the kernels it compiles along), and the
+sums by module.
 ``--run`` also times ``bifilar run --model MODEL`` (the built-in study) from a cold and from a
 warm cache, in a new process with its output in a temporary directory. Prints one JSON line
 per measurement; the best of ``--repeat`` is what to quote, as another job on the same cores
@@ -81,8 +82,17 @@ def per_kernel(model: str, top: int) -> list[dict[str, Any]]:
         for part in resolve_model(model).warm_up:
             part()
     ranked = sorted(totals.items(), key=lambda kv: -kv[1])
-    return [{"kernel": k, "compile_s": round(s, 2)} for k, s in ranked[:top]] + [
-        {"kernel": "all", "compile_s": round(sum(totals.values()), 2), "count": len(totals)}]
+    modules: dict[str, float] = {}
+    for name, seconds in totals.items():
+        # numba's own functions (its NumPy implementations) together, the solver's by module
+        module = "numba" if name.startswith("numba.") else name.split(".<locals>")[0]
+        module = module if module == "numba" else module.rsplit(".", 1)[0]
+        modules[module] = modules.get(module, 0.0) + seconds
+    by_module = sorted(modules.items(), key=lambda kv: -kv[1])
+    return ([{"kernel": k, "compile_s": round(s, 2)} for k, s in ranked[:top]]
+            + [{"module": m, "compile_s": round(s, 2)} for m, s in by_module]
+            + [{"kernel": "all", "compile_s": round(sum(totals.values()), 2),
+                "count": len(totals)}])
 
 
 def run_study(model: str, cold: bool) -> float:

@@ -40,9 +40,10 @@ from studies.registry import resolve_model
 PROGRESS_INTERVAL = 10.0
 # Wall-clock seconds numba takes to compile the rotor model's kernels (most of the solver's)
 # into its cache on a first run, its two warm-up parts on two workers at once
-# (pipelines.kernels, benchmarks/first_run.py: MEASURED in a fresh environment on an idle
-# 2-core machine; 25 s in one process; a loaded machine takes several times that).
-COMPILE_SECONDS = 20
+# (pipelines.kernels; benchmarks/first_run.py: 22.8 s at best on a 2-core machine, 28 s in
+# one process; 30-35 s inside `bifilar run` with another job beside it, which can make it
+# several times longer).
+COMPILE_SECONDS = 25
 
 
 class ModelFailure(RuntimeError):

@@ -364,7 +364,7 @@ def compile_kernels(scheme: str = "ep", steps: int = 3) -> None:
 
     A warm-up part (:attr:`ModelSpec.warm_up`) of this model, of :mod:`studies.hub` and of
     :mod:`studies.rotor`: a few steps call every kernel a case calls, the curve sliding and
-    rolling joints' the most expensive to compile (about 10 s of the rotor's 25 s). The pins
+    rolling joints' the most expensive to compile (5–10 s of its 14 s alone). The pins
     are damped, as the hub's and the rotor's are (their dampers have kernels of their own).
     """
     from solver.integrators import make_integrator

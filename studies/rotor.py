@@ -746,9 +746,9 @@ def compile_kernels(steps: int = 3) -> None:
     with its integrator.
 
     A warm-up part of this model (:attr:`ModelSpec.warm_up`): the elastic blades, their
-    lifting lines, the inflow, the joints and the integrator (about 15 s to compile on an idle
-    machine). The bifilars' kernels are the other part (:func:`studies.bifilar.compile_kernels`),
-    compiled at the same time on another worker.
+    lifting lines, the inflow, the joints and the integrator (20–26 s to compile alone on a
+    2-core machine). The bifilars' kernels are the other part
+    (:func:`studies.bifilar.compile_kernels`), compiled at the same time on another worker.
     """
     p = SPEC.validate({"bifilar": "equivalent"})
     model, parts = build(p)
