@@ -136,7 +136,8 @@ def _report(results: Sequence[dict[str, Any]], elapsed: float,
     compiled = sum(r["compiled"] for r in results)
     if compiled:
         where = next((r["cache"] for r in results if r["cache"]), None)
-        say(f"compiled {compiled} kernel{'s' if compiled > 1 else ''} in {elapsed:.1f} s"
+        # (no count: two parts at once may both compile a kernel they share)
+        say(f"kernels compiled in {elapsed:.1f} s"
             + (f", cached in {where}" if where else "") + " for the next runs")
 
 
@@ -151,7 +152,7 @@ def warm_up_workers(client: Any, model_ref: str, say: Callable[[str], None]) -> 
     time, and wait for them; the sweep's cases then load the kernels from numba's cache.
 
     Says ``compiling kernels (first run only …)`` when a worker starts compiling, and at the
-    end how many kernels were compiled in how many seconds. Does nothing for a model without
+    end how many seconds the compilation took. Does nothing for a model without
     warm-up parts. On workers that do not share a file system, each part's kernels are cached
     only where it ran, and the other workers compile them in their first case.
 

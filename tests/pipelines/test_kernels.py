@@ -58,7 +58,7 @@ def test_warm_up_on_the_workers_says_once_and_goes_on_after_a_failure(scheduler)
     assert len(compiling) == 1, lines
     assert any(line.startswith("warning: compiling kernels ahead failed (RuntimeError: "
                                "warm-up part broken (test))") for line in lines), lines
-    assert any(line.startswith("compiled 2 kernels in ") for line in lines), lines
+    assert any(line.startswith("kernels compiled in ") for line in lines), lines
 
 
 def test_warm_up_of_a_model_without_parts_does_nothing(scheduler):
