@@ -48,6 +48,7 @@ from pipelines.checks import (
 from pipelines.cluster import SweepError, check_cluster
 from pipelines.fanplot_command import fanplot
 from pipelines.options import OutPath
+from pipelines.progress import printer
 from pipelines.single import EXIT_FAILED_CASES, fail
 from pipelines.study_commands import collar, pendulum
 from pipelines.studyfile import StudyError
@@ -305,6 +306,31 @@ def run(ctx: click.Context, out_dir: Path, model: str, workers: int | None,
     for path in paths:
         click.echo(str(path))
     _exit_if_not_ok(not_ok)
+
+
+@main.command("compile")
+@click.option("--model", "models", multiple=True, metavar="NAME",
+              help="A model whose kernels to compile (repeatable; default: every built-in "
+                   "model with a warm-up: hub, pendulum, rotor).")
+@click.option("--processes", type=click.IntRange(min=1), default=2, show_default=True,
+              help="Processes compiling at the same time (numba compiles in one thread).")
+def compile_(models: tuple[str, ...], processes: int) -> None:
+    """Compile the solver's kernels into numba's cache now rather than in the first run.
+
+    A first `bifilar run` or `bifilar sweep` does this itself before its cases; this command
+    is for an installation whose workers run elsewhere (batch jobs sharing the file system) or
+    should not wait. Prints where the kernels are cached; does nothing when they are already.
+    """
+    from pipelines.kernels import warm_up_locally
+    from studies.registry import available, resolve_model
+
+    with _user_errors():
+        names = list(models) or [m for m in available() if resolve_model(m).warm_up]
+        for name in names:
+            resolve_model(name)  # an unknown model is one error line before anything runs
+        results = warm_up_locally(names, printer(), processes)
+    if any(r["error"] for r in results):
+        raise click.exceptions.Exit(EXIT_FAILED_CASES)
 
 
 # --- single-model commands ----------------------------------------------------------------------

@@ -49,6 +49,7 @@ from pipelines.cluster import (
     dashboard_works,
     wait_for_workers,
 )
+from pipelines.kernels import warm_up_workers
 from pipelines.lock import sweep_lock
 from pipelines.progress import finished_line, forward, new_topic, printer
 from pipelines.studyfile import (
@@ -255,6 +256,8 @@ def _run_cases(study: Study, todo: list[Case], cases_dir: Path, workers: int | N
         dashboard = dashboard_works(client, info)
         say(f"running {len(todo)} case(s) of {study.path} on {len(info.get('workers', {}))} "
             "dask worker(s)" + (f"; dashboard {client.dashboard_link}" if dashboard else ""))
+        # every worker would otherwise compile the same kernels in its first case
+        warm_up_workers(client, study.model_ref, say)
         topic = new_topic()
         client.subscribe_topic(topic, forward(say, {c.case_id: c.label for c in todo}))
         paths = [str(c.path(cases_dir)) for c in todo]

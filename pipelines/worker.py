@@ -38,10 +38,12 @@ from studies.registry import resolve_model
 
 # Least time between two forwarded progress lines of one case (s); the first always goes.
 PROGRESS_INTERVAL = 10.0
-# Wall-clock seconds numba takes to compile the solver's kernels into its cache on a first run
-# (the rotor model, most kernels: measured 20-30 s with two workers compiling at once in a
-# fresh environment on an idle 2-core machine; a loaded machine takes several times that).
-COMPILE_SECONDS = 30
+# Wall-clock seconds numba takes to compile the rotor model's kernels (most of the solver's)
+# into its cache on a first run, its two warm-up parts on two workers at once
+# (pipelines.kernels; benchmarks/first_run.py: 22.8 s at best on a 2-core machine, 28 s in
+# one process; 30-35 s inside `bifilar run` with another job beside it, which can make it
+# several times longer).
+COMPILE_SECONDS = 25
 
 
 class ModelFailure(RuntimeError):
@@ -87,12 +89,22 @@ def _progress_listener(topic: str, case_id: str) -> Any:
 
 
 @contextlib.contextmanager
-def compile_notice(say: Any) -> Iterator[None]:
+def compile_notice(say: Any, message: str | None = None) -> Iterator[None]:
     """Say once that numba is compiling kernels, when it starts to (its cache is cold).
 
     numba raises its ``numba:compile`` event only for a kernel it does not find in its cache
-    (``__pycache__`` beside the solver's modules), so the line appears on a first run, after
-    an upgrade, or in a fresh environment, and never when the kernels load from the cache.
+    (``__pycache__`` beside the solver's modules, :mod:`pipelines.kernels`), so the line
+    appears on a first run, after an upgrade, or in a fresh environment, and never when the
+    kernels load from the cache. A sweep compiles the model's kernels before its cases
+    (:func:`pipelines.kernels.warm_up_workers`), so a case says it only for kernels the
+    model's warm-up does not call, or for a model without one.
+
+    Parameters
+    ----------
+    say
+        Receives the line.
+    message
+        The line (default: that kernels are being compiled, and that it happens once).
     """
     try:
         from numba.core import event
@@ -106,8 +118,8 @@ def compile_notice(say: Any) -> Iterator[None]:
             nonlocal told
             if not told:
                 told = True
-                say(f"compiling kernels (first run, about {COMPILE_SECONDS} s on an idle "
-                    "machine; numba caches them for the next runs)...")
+                say(message or "compiling kernels (first run only; numba caches them for "
+                    "the next runs)...")
 
         def on_end(self, ev: Any) -> None:
             pass

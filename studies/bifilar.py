@@ -358,6 +358,26 @@ def simulate(p: Parameters) -> xr.Dataset:
     }, {"message": sim.message})
 
 
+def compile_kernels(scheme: str = "ep", steps: int = 3) -> None:
+    """Compile every kernel a bifilar calls into numba's cache (or load it from there): the
+    pendulum at its defaults, built and marched ``steps`` steps with ``scheme``.
+
+    A warm-up part (:attr:`ModelSpec.warm_up`) of this model, of :mod:`studies.hub` and of
+    :mod:`studies.rotor`: a few steps call every kernel a case calls, the curve sliding and
+    rolling joints' the most expensive to compile (5–10 s of its 14 s alone). The pins
+    are damped, as the hub's and the rotor's are (their dampers have kernels of their own).
+    """
+    from solver.integrators import make_integrator
+    from solver.system import System
+
+    p = SPEC.validate({"scheme": scheme, "pin_damping": 1.0})
+    model, _, parts = build(p)
+    h = 2 * np.pi / (parts.holes.order_linear * p.hub_speed) / p.steps_per_period
+    integ = make_integrator(System(model), scheme, h)
+    for _ in range(steps):
+        integ.step()
+
+
 def _check_params(p: Parameters) -> None:
     if p.hole_diameter > 0 and p.hole != "circle":
         raise ParameterError("hole_diameter applies to circular holes; give tuning_order for "
@@ -367,4 +387,4 @@ def _check_params(p: Parameters) -> None:
 
 SPEC = ModelSpec("pendulum", PARAMETERS, simulate, _check_params,
                  description="one bifilar pendulum on a hub spinning at constant speed",
-                 outputs=OUTPUTS, version="2")
+                 outputs=OUTPUTS, version="2", warm_up=(compile_kernels,))

@@ -68,6 +68,7 @@ from studies.absorbers import (
 from studies.absorbers import OUTPUTS as ABSORBER_OUTPUTS
 from studies.absorbers import PARAMETERS as ABSORBERS
 from studies.bifilar import BifilarParts
+from studies.bifilar import compile_kernels as compile_bifilar
 from studies.equivalent import EquivalentParts, equivalent_absorber
 from studies.harmonics import N_MAX
 from studies.holes import MAX_TANGENT_ANGLE, Holes
@@ -625,6 +626,25 @@ def symmetry(system: System, hub, shaft, parts) -> CyclicSymmetry:
     return CyclicSymmetry(system, sectors, rotating=rotating, axis=Z, centre=shaft)
 
 
+def compile_kernels(steps: int = 3) -> None:
+    """Compile the kernels of the hub without its bifilars into numba's cache (or load them
+    from there): the hub with their linear equivalent, built and marched ``steps`` steps with
+    its composed ``ep`` step.
+
+    A warm-up part of this model (:attr:`ModelSpec.warm_up`); the bifilars' kernels are the
+    other (:func:`studies.bifilar.compile_kernels`), compiled at the same time on another
+    worker.
+    """
+    p = SPEC.validate({"bifilar": "equivalent"})
+    model, *_ = build(p)
+    integ = make_integrator(System(model), "ep", 2 * np.pi / p.hub_speed / p.steps_per_rev,
+                            tol=NEWTON_TOL)
+    if p.composition != "none":
+        integ = Composed(integ, p.composition)
+    for _ in range(steps):
+        integ.step()
+
+
 def _check(p: Parameters) -> None:
     periodic.check(p)
     check(p)
@@ -632,4 +652,4 @@ def _check(p: Parameters) -> None:
 
 SPEC = ModelSpec("hub", PARAMETERS, simulate, _check,
                  description="four-bladed hub with four bifilars on a fuselage restraint",
-                 outputs=OUTPUTS, version="2")
+                 outputs=OUTPUTS, version="2", warm_up=(compile_bifilar, compile_kernels))

@@ -397,6 +397,13 @@ class ModelSpec:
         (:func:`pipelines.sweep.make_case_id`, together with the package version): bump it
         when a change to the model changes its results, and the cases cached in an output
         directory by an earlier version are computed again instead of being reused.
+    warm_up
+        Tiny runs of the model (each a small build and a few time steps, no argument) that
+        between them call every compiled kernel its cases call, so that numba compiles them
+        into its on-disk cache before the cases start (:mod:`pipelines.kernels`). They are
+        independent of one another: a sweep runs them at the same time on different
+        workers, so a split into parts of similar compile time shortens a first run. Empty
+        (the default): the cases compile what they call.
     """
 
     name: str
@@ -407,6 +414,7 @@ class ModelSpec:
     extra: dict[str, Any] = field(default_factory=dict)
     outputs: Mapping[str, Output] = field(default_factory=dict)
     version: str = "1"
+    warm_up: tuple[Callable[[], None], ...] = ()
 
     def __post_init__(self) -> None:
         check_outputs(self.outputs)

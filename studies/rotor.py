@@ -66,6 +66,7 @@ import math
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -92,6 +93,7 @@ from studies.absorbers import N_BIFILARS, AbsorberProbe, add_absorbers, holes_fo
 from studies.absorbers import OUTPUTS as ABSORBER_OUTPUTS
 from studies.absorbers import PARAMETERS as ABSORBERS
 from studies.bifilar import BifilarParts
+from studies.bifilar import compile_kernels as compile_bifilar
 from studies.equivalent import EquivalentParts
 from studies.harmonics import harmonics
 from studies.holes import Holes
@@ -930,6 +932,23 @@ def turning(system: System, parts: RotorParts, omega: float) -> TurningParts:
     return TurningParts(system, [o for s in sectors for o in s] + rotating, Z, omega)
 
 
+def compile_kernels(steps: int = 3) -> None:
+    """Compile the kernels of the rotor without its bifilars into numba's cache (or load them
+    from there): the rotor with their linear equivalent, built and marched ``steps`` steps
+    with its integrator.
+
+    A warm-up part of this model (:attr:`ModelSpec.warm_up`): the elastic blades, their
+    lifting lines, the inflow, the joints and the integrator (20–26 s to compile alone on a
+    2-core machine). The bifilars' kernels are the other part
+    (:func:`studies.bifilar.compile_kernels`), compiled at the same time on another worker.
+    """
+    p = SPEC.validate({"bifilar": "equivalent"})
+    model, parts = build(p)
+    integ = integrator(System(model), p, 2 * np.pi / p.hub_speed / p.steps_per_rev, parts)
+    for _ in range(steps):
+        integ.step()
+
+
 def _check(p: Parameters) -> None:
     periodic.check(p)
     trim.check(p)
@@ -943,4 +962,6 @@ def _check(p: Parameters) -> None:
 SPEC = ModelSpec("rotor", PARAMETERS, simulate, _check,
                  description="four-bladed elastic UH-60 rotor with aerodynamics and four "
                              "bifilars on a fuselage-beam",
-                 outputs=OUTPUTS, version="5")
+                 outputs=OUTPUTS, version="5",
+                 # the two parts take about as long to compile (curve joints / the rest)
+                 warm_up=(partial(compile_bifilar, "galpha"), compile_kernels))

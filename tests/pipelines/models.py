@@ -23,6 +23,7 @@ on their ``sys.path``).
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import time
 from typing import Any
@@ -241,3 +242,35 @@ SPEC = ModelSpec(
     outputs=OUTPUTS,
 )
 register(SPEC)
+
+
+# --- a model with warm-up parts (pipelines.kernels) ------------------------------------------
+
+
+def _warm_kernel(scale: float) -> Any:
+    """A new numba kernel (not cached on disk), so that every call of a warm-up part in a
+    fresh process compiles one kernel."""
+    import numba
+
+    @numba.njit(cache=False)
+    def kernel(x: float) -> float:
+        return scale * x
+
+    return kernel
+
+
+def warm_up_double() -> None:
+    """Warm-up part: compiles one kernel."""
+    assert _warm_kernel(2.0)(1.0) == 2.0
+
+
+def warm_up_fails() -> None:
+    """Warm-up part that fails after compiling one kernel."""
+    _warm_kernel(3.0)(1.0)
+    raise RuntimeError("warm-up part broken (test)")
+
+
+# Workers find it as "tests.pipelines.models:WARM_SPEC": the test model with two warm-up parts.
+WARM_SPEC = dataclasses.replace(SPEC, name="pipeline-test-warm-up",
+                                warm_up=(warm_up_double, warm_up_fails))
+register(WARM_SPEC)

@@ -396,7 +396,7 @@ def test_compiling_kernels_is_announced_once():
     lines: list[str] = []
     with compile_notice(lines.append):
         assert twice(1.0) == 2.0 and thrice(1.0) == 3.0
-    assert len(lines) == 1 and lines[0].startswith("compiling kernels (first run, about ")
+    assert len(lines) == 1 and lines[0].startswith("compiling kernels (first run only")
     lines.clear()
     with compile_notice(lines.append):
         twice(2.0)  # compiled already: nothing to say
