@@ -88,6 +88,7 @@ from solver.symmetry import CyclicSymmetry
 from solver.system import System
 from solver.timefunctions import TimeFunction, linear
 from solver.turning import TurningParts
+from solver.vortex_kernels import induced_velocity
 from studies import periodic, rotor_wake, trim
 from studies.absorbers import N_BIFILARS, AbsorberProbe, add_absorbers, holes_for, pin_damping
 from studies.absorbers import OUTPUTS as ABSORBER_OUTPUTS
@@ -947,6 +948,8 @@ def compile_kernels(steps: int = 3) -> None:
     integ = integrator(System(model), p, 2 * np.pi / p.hub_speed / p.steps_per_rev, parts)
     for _ in range(steps):
         integ.step()
+    # the prescribed wake's Biot–Savart kernel
+    induced_velocity(np.zeros((1, 3)), np.zeros((1, 3)), np.ones((1, 3)), 1.0, 0.1)
 
 
 def _check(p: Parameters) -> None:
