@@ -289,6 +289,11 @@ OUTPUTS: dict[str, Output] = {
     "run_unknowns": Output("1", "unknowns of the multibody model", dims=()),
     "run_wake_updates": Output("1", "updates of the prescribed wake (0 with Peters–He)",
                                dims=()),
+    "run_wake_error_estimate": Output(
+        "1", "estimated truncation error of the prescribed wake on the 4P hub loads: the change "
+        "of the 4P fixed-frame hub forces (x, y and vertical) and fuselage moments when the wake "
+        "is refined (twice the segments per turn and twice the turns), relative to each load's "
+        "4P amplitude (the in-plane pairs' larger); largest", dims=(), optional=True),
     "run_wake_change": Output("1", "last change of the prescribed wake's induced velocity, "
                               "relative to its largest value (0 with Peters–He)", dims=()),
 }
@@ -622,6 +627,22 @@ class _Sampler:
                          torque, math.degrees(beta), *np.degrees(phis)])
 
 
+def vibratory_change(rows: np.ndarray, other: np.ndarray, steps_per_rev: int) -> float:
+    """The largest change of the 4P fixed-frame hub loads (in-plane force, vertical force,
+    fuselage moments) from the recorded revolution ``rows`` to ``other`` (the samples of
+    :class:`_Sampler`), relative to each load's 4P amplitude (the in-plane pairs' larger)."""
+    col = _Sampler.COLUMNS.index
+    worst = 0.0
+    for group in (("fx", "fy"), ("fz",), ("m11", "m22")):
+        idx = [col(c) for c in group]
+        a = periodic.rev_harmonics(rows[-steps_per_rev:, idx])[4]
+        b = periodic.rev_harmonics(other[-steps_per_rev:, idx])[4]
+        scale = float(np.abs(a).max())
+        if scale > 0.0:
+            worst = max(worst, float(np.abs(b - a).max()) / scale)
+    return worst
+
+
 def newton_tolerance(steps_per_rev: int) -> float:
     """Newton's relative tolerance at ``steps_per_rev``: :data:`NEWTON_TOL` up to
     :data:`NEWTON_STEPS`, then falling as h³ (see :data:`NEWTON_TOL`)."""
@@ -819,6 +840,18 @@ def simulate(p: Parameters) -> xr.Dataset:
         ramp()
         transient += rec.transient + p.revolutions
         rec = periodic_response()
+    wake_error, wake_note = float("nan"), ""
+    if wake is not None and p.wake_error_estimate:
+        # the wake's truncation error of the vibratory loads: the periodic response again
+        # with the wake refined (twice the segments per turn and twice the turns), against
+        # the recorded one
+        wake.refine()
+        try:
+            finer = periodic_response()
+        except RuntimeError as exc:
+            wake_note = f"no wake error estimate: {exc}"
+        else:
+            wake_error = vibratory_change(rec.samples, finer.samples, nrev)
     for i in [*done, integ]:
         steps += i.n_steps
         iterations += i.n_iterations
@@ -873,6 +906,8 @@ def simulate(p: Parameters) -> xr.Dataset:
         "advance_ratio": np.float64(p.flight_speed / (omega * UH60A.radius)),
         "effective_fuselage_stiffness": np.float64(parts.fuselage_stiffness),
         "fuselage_damping": np.float64(parts.fuselage_damping),
+        **({"run_wake_error_estimate": np.float64(wake_error)}
+           if np.isfinite(wake_error) else {}),
         "run_wake_updates": np.int32(0 if wake is None else wake.updates),
         "run_wake_change": np.float64(0.0 if wake is None else wake.change),
         # the controls flown: the parameters', or the trim's
@@ -891,7 +926,7 @@ def simulate(p: Parameters) -> xr.Dataset:
         "flapping_cosine": np.float64(flap.cos[1]),
         "flapping_sine": np.float64(flap.sin[1]),
     }
-    note = rec.note
+    note = "; ".join(filter(None, [rec.note, wake_note]))
     if trimmer is not None:
         note = "; ".join(filter(None, [note, f"trimmed in {trimmer.updates} control updates"]))
     ds = SPEC.dataset({**series, **facts}, {"message": note})

@@ -82,6 +82,9 @@ PARAMETERS: dict[str, Param] = {
     "wake_tolerance": Param(5e-3, "1", "largest change of the wake's induced velocity between "
                             "iterations, relative to its largest value, for convergence",
                             minimum=0.0, exclusive_minimum=True, maximum=0.5),
+    "wake_error_estimate": Param(True, "1", "estimate the wake's truncation error of the 4P "
+                                 "hub loads (run_wake_error_estimate) by one more periodic "
+                                 "response with the wake refined"),
     "wake_iterations": Param(15, "1", "wake updates allowed after settling", minimum=1,
                              maximum=100),
 }
@@ -147,14 +150,16 @@ class RotorWake:
         self.updates = 0
         self.change = math.inf
         self.history: list[tuple[Array, Array]] = []  # (x, G(x) − x) for Anderson
+        self.fineness = 1
 
     # ------------------------------------------------------------------ the wake
     def wake(self, ct: float) -> TipVortexWake:
-        """The wake's geometry for the thrust coefficient ``ct``."""
+        """The wake's geometry for the thrust coefficient ``ct`` (refined :attr:`fineness`
+        times in length and segments per turn)."""
         lam0 = max(glauert_inflow(ct, self.mu, self.lam_f), 1e-4)
         return TipVortexWake(UH60A.radius, self.blades, self.mu, self.lam_f, lam0,
-                             turns=self.p.wake_turns,
-                             segments_per_turn=self.p.wake_segments_per_turn,
+                             turns=self.p.wake_turns * self.fineness,
+                             segments_per_turn=self.p.wake_segments_per_turn * self.fineness,
                              release_radius=self.p.wake_release_radius,
                              descent=self.p.wake_descent)
 
@@ -209,6 +214,20 @@ class RotorWake:
         return (float(np.sum(w * self.weights) / np.sum(self.weights))
                 / (self.omega * UH60A.radius))
 
+    @property
+    def thrust_coefficient(self) -> float:
+        """C_T of the last recorded revolution."""
+        disk = math.pi * UH60A.radius**2
+        return float(self.thrust.mean()) / (self.p.air_density * disk
+                                            * (self.omega * UH60A.radius) ** 2)
+
+    def refine(self) -> None:
+        """Move the table to the wake refined twice (segments per turn and turns) for the
+        last recorded revolution: the wake's truncation error estimate."""
+        self.fineness = 2
+        self.table[:] = (self._velocities(self.points, self.gamma, self.tip, self.root,
+                                          self.thrust_coefficient) - self.inflow)
+
     def update(self, accelerate: bool = False) -> float:
         """Recompute the wake from blade 0's last revolution and move the table towards it;
         returns the change (relative to the table's largest value) before the move.
@@ -222,10 +241,8 @@ class RotorWake:
         if not self.filled.all():
             raise RuntimeError("rotor wake: a whole revolution must be recorded before an "
                                "update")
-        disk = math.pi * UH60A.radius**2
-        ct = float(self.thrust.mean()) / (self.p.air_density * disk
-                                          * (self.omega * UH60A.radius) ** 2)
-        new = self._velocities(self.points, self.gamma, self.tip, self.root, ct) - self.inflow
+        new = (self._velocities(self.points, self.gamma, self.tip, self.root,
+                                self.thrust_coefficient) - self.inflow)
         scale = max(float(np.abs(new).max()), 1e-12)
         x, f = self.table.ravel().copy(), (new - self.table).ravel()
         self.change = float(np.abs(f).max()) / scale
