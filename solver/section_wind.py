@@ -6,8 +6,8 @@ multibody model does not carry as states — the vortex wake of a rotor
 :class:`PeriodicWind`: one velocity per section, sampled at equal times over a period and
 interpolated linearly between the samples (exact at the samples, which a rotor analysis puts
 at its time steps). The sections add it to the free stream
-(:class:`~solver.lifting_line.LiftingLine` ``wind``). It depends on time only: the airloads'
-Jacobians are unchanged by it.
+(:class:`~solver.lifting_line.LiftingLine` ``wind``). It depends on time only, so the
+airloads' Jacobians need no terms of their own for it (only their values see it).
 
 The samples live in one array that the analysis may update in place between revolutions
 (e.g. a wake iterated with the periodic response); several lines may share it with different

@@ -736,7 +736,7 @@ def simulate(p: Parameters) -> xr.Dataset:
     steps = iterations = 0
     settled = None
     # the prescribed wake (if any), shared by every model built below
-    wake = build(p, d)[1].wake
+    wake = build(p, d)[1].wake if p.inflow == "prescribed_wake" else None
     # the controls flown (a trim changes them as the response settles) and the trim, if any
     controls, trimmer = trim.schedule(p), trim.for_rotor(p)
     if p.settle_revolutions and p.settle_damping_factor != 1.0:
