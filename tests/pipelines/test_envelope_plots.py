@@ -4,6 +4,7 @@ absorber; no rotor is run), and the ``--study`` option of ``bifilar run``."""
 
 from __future__ import annotations
 
+import itertools
 from pathlib import Path
 
 import numpy as np
@@ -150,7 +151,8 @@ def test_envelope_study_file_holds_both_sweeps():
     assert all(p["trim"] == "propulsive" for p in params)
     nominal = {(p["flight_speed"], p["bifilar"]) for p in params if p["hub_speed"] == 27.0}
     speeds = sorted({v for v, _ in nominal})
-    assert len(speeds) >= 7 and speeds[0] / KNOT < 60 and speeds[-1] / KNOT > 140
+    assert len(speeds) >= 7 and speeds[0] / KNOT == pytest.approx(80, abs=0.01)
+    assert speeds[-1] / KNOT == pytest.approx(160, abs=0.01)
     assert {b for _, b in nominal} == set(ABSORBERS)
     omegas = {p["hub_speed"] for p in params}
     assert min(omegas) == pytest.approx(0.95 * 27.0) and max(omegas) == pytest.approx(1.05 * 27)
@@ -169,3 +171,30 @@ def test_run_study_option(monkeypatch, tmp_path):
                                                    "--out", str(tmp_path)]))
     assert "--study" in line and "table1" in line and "envelope" in line
     assert not (tmp_path / "archive.nc").exists()
+
+
+
+def test_cartesian_sweep_with_another_parameter(monkeypatch, tmp_path):
+    """A [sweep] of flight_speed × bifilar × gross_weight: one line per absorber and weight."""
+    weights = [60e3, 72.3e3]
+    shape = (len(SPEEDS), len(ABSORBERS), len(weights))
+    dims = ("flight_speed", "bifilar", "gross_weight")
+    force = np.zeros((*shape, 9, 2))
+    power = np.zeros(shape)
+    for (i, kt), (j, b), (k, w) in itertools.product(enumerate(SPEEDS), enumerate(ABSORBERS),
+                                                      enumerate(weights)):
+        force[i, j, k, 4] = _case(kt, 27.0, b)["force"]
+        power[i, j, k] = _case(kt, 27.0, b)["power"] * w / 72.3e3
+    sweep = xr.Dataset(
+        {"status": (dims, np.full(shape, STATUS_OK, dtype=np.int8)),
+         "hub_force_fixed_amplitude": ((*dims, "harmonic", "direction"), force),
+         "rotor_power": (dims, power), "trim": ((), "propulsive"), "hub_speed": ((), 27.0)},
+        coords={"flight_speed": np.array(SPEEDS) * KNOT, "bifilar": ABSORBERS,
+                "gross_weight": weights, "harmonic": np.arange(9), "direction": ["x", "y"]})
+    figures = drawn(sweep, monkeypatch, tmp_path)
+    assert set(figures) == {"envelope_hub_loads_4p", "envelope_controls_power"}
+    curves = _lines(figures["envelope_controls_power"], 0)
+    assert len(curves) == 6
+    np.testing.assert_allclose(curves["free, gross_weight=60000"][1],
+                               [_case(kt, 27.0, "free")["power"] * 60 / 72.3e3
+                                for kt in SPEEDS])
