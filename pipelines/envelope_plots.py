@@ -288,6 +288,14 @@ def _rotor_speed_figure(table: pd.DataFrame, out_dir: Path, formats: Sequence[st
                     "reduction_4p_vs_hub_speed", out_dir, formats, styles, keys, cols=3)
 
 
+def sweeps_envelope(ds: xr.Dataset) -> bool:
+    """Whether an archive's cases vary the airspeed or the rotor speed of the rotor (and hold
+    its 4P hub loads): its figures are then this module's, not Table 1's paired comparisons."""
+    if "hub_force_fixed_amplitude" not in ds:
+        return False
+    return any(name in ds and np.unique(ds[name].values).size > 1 for name in AXES)
+
+
 def envelope_figures(ds: xr.Dataset, parameters: Sequence[str], out_dir: Path,
                      formats: Sequence[str]) -> list[Path]:
     """The flight-envelope figures of an archive (see the module documentation).

@@ -706,7 +706,10 @@ def plot_archive(
         # response curves need a numeric abscissa; categories (a case list, a string
         # parameter such as ``hole``) are grouped bars
         lines = _response_dim(ds) is not None
-        for pair in comparison_pairs(ds):
+        from pipelines.envelope_plots import sweeps_envelope
+
+        # Table 1's paired comparisons; an envelope's cases get the envelope figures instead
+        for pair in [] if sweeps_envelope(archived) else comparison_pairs(ds):
             paths += _comparison(ds, spec, pair, out, formats)
         for name, decl in spec.outputs.items():
             if not decl.is_vector or name not in ds:
@@ -736,5 +739,6 @@ def plot_archive(
     if spec.periodic:
         from pipelines.envelope_plots import envelope_figures
 
+        # (the rotor's, when it sweeps airspeed with trim or rotor speed)
         paths += envelope_figures(archived, list(spec.parameters), out, formats)
     return paths

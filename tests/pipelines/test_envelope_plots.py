@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import itertools
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -198,3 +199,23 @@ def test_cartesian_sweep_with_another_parameter(monkeypatch, tmp_path):
     np.testing.assert_allclose(curves["free, gross_weight=60000"][1],
                                [_case(kt, 27.0, "free")["power"] * 60 / 72.3e3
                                 for kt in SPEEDS])
+
+
+def test_plot_archive_draws_the_envelope_figures_without_paired_comparisons(monkeypatch,
+                                                                           tmp_path):
+    """bifilar plot on the envelope's archive: its figures, and no Table 1 comparisons."""
+    from pipelines.envelope_plots import sweeps_envelope
+
+    ds = synthetic_archive()
+    assert sweeps_envelope(ds)
+    assert not sweeps_envelope(ds.isel(case=[0, 1, 2]))  # one airspeed, one rotor speed
+    # the rotor's declarations are not needed for these figures: a model with none
+    spec = SimpleNamespace(parameters=dict.fromkeys(PARAMETERS), outputs={}, periodic=True)
+    monkeypatch.setattr(plots, "open_archive", lambda path: ds)
+    monkeypatch.setattr(plots, "archive_model", lambda ds, path: spec)
+    drawn_stems: list[str] = []
+    monkeypatch.setattr(plots, "_save", lambda fig, out, stem, formats: drawn_stems.append(stem)
+                        or [out / f"{stem}.png"])
+    plots.plot_archive(tmp_path / "archive.nc", tmp_path)
+    assert "envelope_hub_loads_4p" in drawn_stems and "reduction_4p_vs_hub_speed" in drawn_stems
+    assert not any(stem.startswith("compare_") for stem in drawn_stems)
