@@ -5,7 +5,8 @@
     bifilar sweep STUDY.toml --out DIR [--workers N | --scheduler ADDRESS | --cluster slurm|pbs]
                   [--worker-timeout SECONDS] [--retry-failed] [--quiet]
     bifilar plot ARCHIVE --out DIR [--format png --format pdf]
-    bifilar run [--out DIR] [--model rotor|hub] [--workers N | --scheduler ADDRESS | --cluster …]
+    bifilar run [--out DIR] [--model rotor|hub] [--study table1|envelope]
+                [--workers N | --scheduler ADDRESS | --cluster …]
     bifilar collar --curve circle|cycloid --theta0 DEG --out FILE.nc   (or --figures DIR)
     bifilar pendulum --amplitude DEG --out FILE.nc                    (or --figures DIR)
     bifilar fanplot [--speeds RAD_PER_S ...] --out FILE.nc
@@ -57,6 +58,12 @@ from studies.parameters import ParameterError
 
 # The built-in study of each model `bifilar run --model` offers.
 BUILT_IN_STUDIES = {"rotor": "rotor_study.toml", "hub": "hub_study.toml"}
+# The built-in studies `bifilar run --study` offers: study -> model -> file (a model missing
+# from a study's table cannot run it).
+STUDIES: dict[str, dict[str, str]] = {
+    "table1": BUILT_IN_STUDIES,
+    "envelope": {"rotor": "envelope_study.toml"},
+}
 EXIT_INTERRUPTED = 130
 
 # Errors whose message tells the user what to fix; anything else is a bug and keeps its traceback.
@@ -64,10 +71,37 @@ USER_ERRORS = (StudyError, ParameterError, ArchiveError, SweepError, FileNotFoun
                InputError)
 
 
-def default_study(model: str = "rotor") -> Traversable:
-    """The built-in study of ``model``: the paper's Table 1 cases 0–3 and the linear
-    equivalent of case 1, on the rotor model (default) or the hub model."""
-    return resources.files("studies") / BUILT_IN_STUDIES[model]
+def default_study(model: str = "rotor", study: str = "table1") -> Traversable:
+    """A built-in study file.
+
+    Parameters
+    ----------
+    model
+        ``rotor`` (default) or ``hub``.
+    study
+        ``table1`` (default): the paper's Table 1 cases 0–3 and the linear equivalent of case 1;
+        ``envelope``: the rotor with propulsive trim over airspeed and rotor speed
+        (``studies/envelope_study.toml``, rotor only).
+
+    Returns
+    -------
+    importlib.resources.abc.Traversable
+        The study file.
+
+    Raises
+    ------
+    pipelines.checks.InputError
+        If ``study`` is unknown or has no file for ``model``.
+    """
+    if study not in STUDIES:
+        raise InputError(f"--study {study}: unknown; valid: {', '.join(STUDIES)}")
+    files = STUDIES[study]
+    if model not in files:
+        raise InputError(
+            f"--study {study} --model {model}: the {study} study runs on the "
+            f"{' or '.join(sorted(files))} model only (the hub model has no trim); "
+            f"drop --model {model} or use --study table1")
+    return resources.files("studies") / files[model]
 
 
 @contextlib.contextmanager
@@ -276,28 +310,37 @@ def plot(archive: Path, out_dir: Path, formats: tuple[str, ...]) -> None:
               help="rotor: the paper's UH-60 rotor with elastic blades and aerodynamics; "
                    "hub: a rigid hub with assumed 3P/5P blade shears (faster). The README "
                    "gives the times.")
+@click.option("--study", "study_name", default="table1", show_default=True,
+              type=click.Choice(list(STUDIES)),
+              help="table1: the paper's Table 1 cases 0-3 and the linear equivalent of case 1; "
+                   "envelope: the rotor with propulsive trim at 40-160 kt and at 95-105 % "
+                   "rotor speed, bifilars locked, free and equivalent (rotor model only; "
+                   "studies/envelope_study.toml, 33 cases).")
 @workers_option
 @scheduler_option
 @cluster_option
 @worker_timeout_option
 @click.pass_context
-def run(ctx: click.Context, out_dir: Path, model: str, workers: int | None,
+def run(ctx: click.Context, out_dir: Path, model: str, study_name: str, workers: int | None,
         scheduler: str | None, cluster: str | None, worker_timeout: float | None) -> None:
-    """Run the built-in study (the paper's Table 1, cases 0-3, and the linear equivalent of
-    case 1) on the rotor (default) or the hub model, and plot it into DIR/plots.
+    """Run a built-in study and plot it into DIR/plots: the paper's Table 1 (cases 0-3, and
+    the linear equivalent of case 1) on the rotor (default) or the hub model, or with
+    --study envelope the rotor's flight envelope with propulsive trim.
 
     Exit status 0 if every case is ok, 1 if some failed (the ok ones are still plotted).
     """
     from pipelines.plots import plot_archive
 
     _check_cluster(workers, scheduler, cluster)
+    with _user_errors():
+        study_file = default_study(model, study_name)
     command = _command_line(ctx, "--out", str(out_dir), "--model", model,
-                            *_cluster_args(workers, scheduler, cluster))
+                            "--study", study_name, *_cluster_args(workers, scheduler, cluster))
     with _user_errors():
         check_output_dir(out_dir)
         check_output_dir(out_dir / "plots", "--out")
     with _user_errors(), _terminate_as_interrupt(), \
-            resources.as_file(default_study(model)) as study:
+            resources.as_file(study_file) as study:
         archive = run_sweep(study, out_dir, workers=workers, scheduler=scheduler,
                             command=command, worker_timeout=worker_timeout, cluster=cluster)
         counts, not_ok = _not_ok(archive)

@@ -31,6 +31,10 @@ written by :func:`plot_archive` for a per-rev periodic model (the hub):
     histories as one panel each with one line per case (``hub_force_history``, Fig. 16).
     Periodic histories are drawn smooth (Fourier interpolation of the archived revolution).
 
+A rotor archive that sweeps airspeed with trim, or rotor speed, also gets the flight-envelope
+figures of :mod:`pipelines.envelope_plots` (4P hub loads, trimmed controls and power, pin
+amplitude against airspeed; 4P reduction against rotor speed).
+
 For any other model (collar, pendulum): ``results`` (or ``results_vs_<parameter>`` for a
 sweep), the declared scalar results against the first numeric swept parameter, or as grouped
 bars over categories, and the declared histories against time (``<figure>``).
@@ -683,6 +687,7 @@ def plot_archive(
     """
     ds = open_archive(archive_path)
     spec = archive_model(ds, archive_path)
+    archived = ds
     # the charts below address an in-plane vector's harmonic amplitudes (archived as
     # <name>_amplitude) by the vector's name
     ds = ds.rename({f"{n}_amplitude": n for n, d in spec.outputs.items()
@@ -701,7 +706,10 @@ def plot_archive(
         # response curves need a numeric abscissa; categories (a case list, a string
         # parameter such as ``hole``) are grouped bars
         lines = _response_dim(ds) is not None
-        for pair in comparison_pairs(ds):
+        from pipelines.envelope_plots import sweeps_envelope
+
+        # Table 1's paired comparisons; an envelope's cases get the envelope figures instead
+        for pair in [] if sweeps_envelope(archived) else comparison_pairs(ds):
             paths += _comparison(ds, spec, pair, out, formats)
         for name, decl in spec.outputs.items():
             if not decl.is_vector or name not in ds:
@@ -728,4 +736,9 @@ def plot_archive(
         plain = [n for n, d in decls.items() if not d.is_vector and len(d.dims) == 1]
         if plain:
             paths += _histories(ds, plain, stem, cases, out, formats)
+    if spec.periodic:
+        from pipelines.envelope_plots import envelope_figures
+
+        # (the rotor's, when it sweeps airspeed with trim or rotor speed)
+        paths += envelope_figures(archived, list(spec.parameters), out, formats)
     return paths

@@ -518,7 +518,8 @@ def test_cli_bad_study_prints_one_error_line(tmp_path):
 
 def test_cli_run_sweeps_and_plots(scheduler, tmp_path, monkeypatch):
     study = write_study(tmp_path / "default.toml", CASES_STUDY)
-    monkeypatch.setattr(cli, "default_study", lambda model="hub": study)
+    monkeypatch.setattr(cli, "default_study",
+                        lambda model="hub", study_name="table1": study)
     result = CliRunner().invoke(cli.main, ["run", "--out", str(tmp_path / "res"),
                                            "--scheduler", scheduler])
     # one case of four fails: exit status 1, the last line says how many and where to look
