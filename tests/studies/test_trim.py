@@ -296,6 +296,33 @@ def test_uh60_propulsive_trim():
 
 
 @pytest.mark.slow
+def test_forward_flight_power_is_induced_profile_and_parasite():
+    """The propulsively trimmed rotor at 120 kt: its shaft power against the classical sum
+    C_P = κ C_T λ_i + (σ c_d0 / 8)(1 + 4.65 μ²) + D U / (ρ A (ΩR)³) (Johnson, *Helicopter
+    Theory*, ch. 5), λ_i Glauert's for the rotor's C_T at its trimmed shaft tilt, κ = 1/B the
+    induced-power factor of a disk loaded to the tip-loss radius B R, and D the parasite drag
+    ½ρU²f."""
+    speed = 120 * 0.514444  # m/s
+    ds = rotor.run({"trim": "propulsive", "flight_speed": speed, "bifilar": "locked",
+                    "settle_revolutions": 10})
+    p = rotor.SPEC.validate({})
+    tip_speed = p.hub_speed * UH60A.radius
+    scale = p.air_density * math.pi * UH60A.radius**2 * tip_speed**3
+    ct = float(ds.rotor_thrust_coefficient)
+    a = math.radians(float(ds.control_shaft_tilt))
+    mu = speed * math.cos(a) / tip_speed
+    induced = ct * glauert_inflow(ct, mu, speed * math.sin(a) / tip_speed) / UH60A.tip_loss
+    profile = UH60A.solidity * UH60A.cd0 / 8 * (1 + 4.65 * mu**2)
+    parasite = 0.5 * p.air_density * speed**3 * p.flat_plate_area / scale
+    cp = float(ds.rotor_power) / scale
+    # measured 2.985e-4 against 2.987e-4 (0.07 %; induced 21 %, profile 37 %, parasite 42 %
+    # of it). The agreement is closer than the sum's own accuracy: the 4.65μ² of the profile
+    # term stands for the radial flow's drag, which the sections' drag (normal to the span)
+    # leaves out; with 3μ² the sum is 3.5 % lower. Asserted at that.
+    assert cp == pytest.approx(induced + profile + parasite, rel=0.035)
+
+
+@pytest.mark.slow
 def test_a_case_that_does_not_trim_fails_with_its_residuals(monkeypatch):
     monkeypatch.setattr(trim, "MAX_CORRECTIONS", 0)
     with pytest.raises(RuntimeError, match=r"not trimmed after 0 corrections.*C_T/σ off"):
