@@ -86,7 +86,7 @@ from solver.section_wind import PeriodicWind
 from solver.sections import isotropic_section
 from solver.symmetry import CyclicSymmetry
 from solver.system import System
-from solver.timefunctions import TimeFunction, linear
+from solver.timefunctions import linear
 from solver.turning import TurningParts
 from solver.vortex_kernels import induced_velocity
 from studies import periodic, rotor_wake, trim
@@ -226,8 +226,8 @@ FUSELAGE_GA = 1.0e9  # N
 FUSELAGE_GJ = 2.0e7  # N m2
 FUSELAGE_MASS = 10.0  # kg/m
 FUSELAGE_ELEMENTS = 2
-# First guess of the thrust coefficient: the Peters–He states and the prescribed wake start
-# near the rotor's level with it.
+# First guess of the thrust coefficient: the Peters–He states start near the rotor's level
+# with it.
 THRUST_GUESS = 0.007
 
 # The absorbers' hub-level outputs (studies.absorbers), and the rotor's own.
@@ -241,8 +241,9 @@ OUTPUTS: dict[str, Output] = {
                                       history=True, figure="fuselage_moments"),
     "thrust": Output("N", "rotor thrust (aerodynamic, along the shaft)", history=True,
                      harmonics=True),
-    "mean_inflow": Output("1", "mean induced inflow ratio λ0: of the Peters–He states, or of "
-                          "the prescribed wake at the blades' sections (weights r ds)",
+    "mean_inflow": Output("1", "mean induced inflow ratio λ0: of the Peters–He states, or with "
+                          "the prescribed wake the blades' sections' (its correction "
+                          "included), over the disk with weights r ds",
                           history=True),
     "blade_root_shear_flap": Output("N", "blade 0 root shear, flapwise (section d3)",
                                     history=True, harmonics=True),
@@ -299,30 +300,6 @@ OUTPUTS: dict[str, Output] = {
 }
 
 
-def swashplate(theta0: float, theta_c: float, theta_s: float, omega: float,
-               azimuth: float) -> TimeFunction:
-    """Blade pitch θ(t) = θ0 + θc cos ψ + θs sin ψ, ψ = Ωt + ``azimuth`` (rad, rad/s)."""
-    def value(t: float) -> float:
-        psi = omega * t + azimuth
-        return theta0 + theta_c * math.cos(psi) + theta_s * math.sin(psi)
-
-    def rate(t: float) -> float:
-        psi = omega * t + azimuth
-        return omega * (-theta_c * math.sin(psi) + theta_s * math.cos(psi))
-
-    def accel(t: float) -> float:
-        psi = omega * t + azimuth
-        return -omega * omega * (theta_c * math.cos(psi) + theta_s * math.sin(psi))
-
-    return TimeFunction(value, rate, accel)
-
-
-def _shifted(f: TimeFunction) -> TimeFunction:
-    """f(t) − f(0): a driven revolute's angle counts from the built configuration."""
-    f0 = f.value(0.0)
-    return TimeFunction(lambda t: f.value(t) - f0, f.rate, f.accel)
-
-
 @dataclass
 class RotorParts:
     """Handles of the built model for the outputs."""
@@ -377,11 +354,11 @@ def add_blade(model: Model, hub, k: int, p: Parameters, damping_factor: float = 
     er = np.array([math.cos(psi), math.sin(psi), 0.0])
     et = np.array([-math.sin(psi), math.cos(psi), 0.0])
     hinge = e * er
-    pitch = swashplate(math.radians(p.collective), math.radians(p.cyclic_cosine),
-                       math.radians(p.cyclic_sine), omega, psi)
-    theta_start = pitch.value(0.0)
-    driven = (_shifted(pitch) if controls is None
-              else controls.pitch(psi, reference=theta_start))
+    # the swashplate: θ = θ0 + θc cos ψ + θs sin ψ, ψ = Ωt + kπ/2, the driven revolute's angle
+    # counted from the built configuration
+    given = trim.schedule(p)
+    theta_start = given.pitch(psi, reference=0.0).value(0.0)
+    driven = (given if controls is None else controls).pitch(psi, reference=theta_start)
 
     def twist(s):  # structural twist, the blade built at its pitch at t = 0
         return np.interp(np.asarray(s) + e, r_tw, tw_s) + theta_start
@@ -413,7 +390,8 @@ def airloads(blade: Beam, k: int, p: Parameters, flight: FlightCondition,
              inflow: DynamicInflow | None, wind: PeriodicWind | None = None) -> LiftingLine:
     """The lifting line of blade ``k``: the deck's chord and aero twist (relative to the
     beam's structural twist), lift slope, profile drag, tip loss, from the first airstation
-    to the tip; the induced flow of ``inflow`` or the prescribed ``wind`` (a vortex wake)."""
+    to the tip; the induced flow of ``inflow``, plus the prescribed ``wind`` if given (the
+    vortex wake's correction of it, :mod:`studies.rotor_wake`)."""
     e = section_origin(include_cuff=True)
     r_tw, tw_s = blade_twist("structural")
     r_ta, tw_a = blade_twist("aero")
@@ -491,8 +469,9 @@ def build(p: Parameters, d: RotorDesign | None = None, damping_factor: float = 1
     """The rotor model for parameters ``p`` and their derived design ``d`` (default
     :func:`design`'s); ``damping_factor`` multiplies the lag and fuselage dampers (settling
     phase), ``feedback`` adds the delayed lag feedback (marching to the periodic response).
-    With ``inflow = "prescribed_wake"`` the blades see ``wake``'s winds (a new
-    :class:`~studies.rotor_wake.RotorWake` if none is given) instead of Peters–He states.
+    With ``inflow = "prescribed_wake"`` the blades also see ``wake``'s winds (a new
+    :class:`~studies.rotor_wake.RotorWake` if none is given), its correction of the Peters–He
+    inflow.
     ``controls``: a trim's control schedule (pitch and shaft tilt) instead of the parameters'."""
     omega = p.hub_speed
     d = design(p) if d is None else d
@@ -860,8 +839,7 @@ def simulate(p: Parameters) -> xr.Dataset:
     col = {name: data[:, i] for i, name in enumerate(_Sampler.COLUMNS)}
     x_rot, y_rot = to_rotating(omega, t, col["x"], col["y"])
     thrust = float(col["thrust"].mean())
-    disk = math.pi * UH60A.radius**2
-    ct = thrust / (p.air_density * disk * (omega * UH60A.radius) ** 2)
+    ct = thrust / UH60A.thrust_unit(p.air_density, omega)
     flown = controls.controls
     deg = (np.degrees(flown) if trimmer is not None
            else (p.collective, p.cyclic_cosine, p.cyclic_sine, p.shaft_tilt))

@@ -218,9 +218,7 @@ class RotorWake:
     @property
     def thrust_coefficient(self) -> float:
         """C_T of the last recorded revolution."""
-        disk = math.pi * UH60A.radius**2
-        return float(self.thrust.mean()) / (self.p.air_density * disk
-                                            * (self.omega * UH60A.radius) ** 2)
+        return float(self.thrust.mean()) / UH60A.thrust_unit(self.p.air_density, self.omega)
 
     def refine(self) -> None:
         """Move the table to the wake refined twice (segments per turn and turns) for the

@@ -545,7 +545,7 @@ def for_rotor(p: Parameters, blades: int = 4) -> Trimmer | None:
     rigid = RigidRotor(UH60A.lift_slope, UH60A.solidity, lock, nu,
                        root=float(blade_airstations()[0][0]) / r, tip=UH60A.tip_loss)
     tip_speed = omega * r
-    per_ct_sigma = p.air_density * math.pi * r**2 * tip_speed**2 * UH60A.solidity
+    per_ct_sigma = UH60A.thrust_unit(p.air_density, omega) * UH60A.solidity
     # each blade's centrifugal force C = Ω² (S_β + e m_b), at the hinge offset e
     pull = omega**2 * (UH60A.blade_first_moment + UH60A.hinge_radius * UH60A.blade_mass)
     if p.trim == "wind_tunnel":

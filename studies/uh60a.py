@@ -88,6 +88,11 @@ class UH60AData:
         """Radius where the deck's flexible blade (and Yeo's table) starts (m): R − L."""
         return self.radius - self.beam_length
 
+    def thrust_unit(self, density: float, omega: float) -> float:
+        """The thrust of C_T = 1, ρ π R² (ΩR)² (N), at air density ``density`` (kg/m³) and rotor
+        speed ``omega`` (rad/s)."""
+        return density * math.pi * self.radius**2 * (omega * self.radius) ** 2
+
     @property
     def solidity(self) -> float:
         """Thrust-weighted solidity N c / (π R) with the nominal chord (1): 0.0821."""

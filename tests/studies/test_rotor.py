@@ -28,7 +28,8 @@ from solver.modes import natural_frequencies
 from solver.system import System
 from studies.blade import articulated_blade
 from studies.parameters import ParameterError
-from studies.rotor import SPEC, _line_set, add_blade, airloads, swashplate
+from studies.rotor import SPEC, _line_set, add_blade, airloads
+from studies.trim import ControlSchedule
 from studies.uh60a import UH60A, blade_sections, section_origin
 
 OMEGA = UH60A.omega_ref
@@ -77,7 +78,7 @@ def test_assembled_blades_have_the_fan_plot_frequencies():
 
 def test_swashplate_pitch_and_derivatives():
     th0, thc, ths, az = 0.18, 0.08, -0.085, math.pi / 2
-    f = swashplate(th0, thc, ths, OMEGA, az)
+    f = ControlSchedule(np.array([th0, thc, ths]), 0.0, OMEGA).pitch(az, reference=0.0)
     for t in (0.0, 0.013, 0.2):
         psi = OMEGA * t + az
         assert f.value(t) == pytest.approx(th0 + thc * math.cos(psi) + ths * math.sin(psi))
