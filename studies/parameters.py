@@ -404,6 +404,10 @@ class ModelSpec:
         independent of one another: a sweep runs them at the same time on different
         workers, so a split into parts of similar compile time shortens a first run. Empty
         (the default): the cases compile what they call.
+    branch
+        ``branch(p, c) -> list[BranchPoint]``: the model's periodic response followed in one
+        parameter by continuation (:mod:`studies.branches`; a study file's
+        ``[continuation]`` table), or ``None`` if the model cannot continue its responses.
     """
 
     name: str
@@ -415,6 +419,7 @@ class ModelSpec:
     outputs: Mapping[str, Output] = field(default_factory=dict)
     version: str = "1"
     warm_up: tuple[Callable[[], None], ...] = ()
+    branch: Callable[[Any, Any], list[Any]] | None = None
 
     def __post_init__(self) -> None:
         check_outputs(self.outputs)
