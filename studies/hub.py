@@ -38,7 +38,7 @@ extrapolated to zero step (:func:`studies.periodic.richardson`).
 from __future__ import annotations
 
 import time
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -334,7 +334,12 @@ def reduced_samples(p: Parameters, d: HubDesign, t: np.ndarray, **kw) -> np.ndar
     the fuselage x, y (N), fixed frame; the tuning masses' centre of mass x, y (m); the pin
     angles (degree) — from :func:`reduced_response`: the exact equations' periodic response, a
     reference for :func:`run`'s that shares none of its numerics."""
-    sol = reduced_response(p, d, **kw)
+    return solution_rows(p, d, reduced_response(p, d, **kw), t)
+
+
+def solution_rows(p: Parameters, d: HubDesign, sol: PeriodicSwing, t: np.ndarray
+                  ) -> np.ndarray:
+    """:func:`reduced_samples`' rows of the swing-coordinate solution ``sol`` at ``t`` (s)."""
     holes = d.holes
     k, c = d.fuselage_stiffness, d.fuselage_damping
     z, zd = sol.center(t), sol.center(t, derivative=1)
@@ -489,14 +494,7 @@ def simulate(p: Parameters) -> xr.Dataset:
         return integ if p.composition == "none" else Composed(integ, p.composition)
 
     def sampler(integ):
-        def sample() -> np.ndarray:
-            q, v = integ.q, integ.v
-            x = q[os_ : os_ + 3]
-            xd = v[os_ : os_ + 3]
-            cm, phis = absorbers(q, integ.t)
-            f = k * x + c * xd  # force the springs and dampers pass to the fuselage
-            return np.array([integ.t, x[0], x[1], f[0], f[1], cm[0], cm[1], *np.degrees(phis)])
-        return sample
+        return recorder(integ, d, absorbers, os_)
 
     def signals(block: np.ndarray) -> np.ndarray:
         # per signal (hub x, y in the rotating frame, m; pin angles, degree): changes
@@ -573,21 +571,7 @@ def simulate(p: Parameters) -> xr.Dataset:
                              f"{unextrapolated}")
             elif p.richardson:
                 data, extrapolated = corrected, True
-    t = data[:, 0]
-    x_rot, y_rot = to_rotating(omega, t, data[:, 1], data[:, 2])
-    series = {
-        "time": t,
-        "bifilar": np.arange(N_BIFILARS),
-        "hub_x_fixed": data[:, 1],
-        "hub_y_fixed": data[:, 2],
-        "hub_x_rotating": x_rot,
-        "hub_y_rotating": y_rot,
-        "hub_force_x_fixed": data[:, 3],
-        "hub_force_y_fixed": data[:, 4],
-        "bifilar_cm_x_fixed": data[:, 5],
-        "bifilar_cm_y_fixed": data[:, 6],
-        "pin_angle": data[:, 7:].T,
-    }
+    series = recorded_outputs(omega, data)
     facts = {
         **periodic.run_facts(
             rec, hub_speed=omega, revolutions=p.revolutions, samples_per_rev=nrev,
@@ -608,6 +592,45 @@ def simulate(p: Parameters) -> xr.Dataset:
         facts["run_step_error_estimate"] = np.float64(step_error)
     ds = SPEC.dataset({**series, **facts}, {"message": "; ".join(notes)})
     return ds
+
+
+def recorder(integ, d: HubDesign, absorbers: AbsorberProbe, offset: int
+             ) -> Callable[[], np.ndarray]:
+    """The sample of ``integ``'s current state that a run records: time (s), the hub centre
+    x, y (m) and the force on the fuselage x, y (N), fixed frame; the tuning masses' centre of
+    mass x, y (m); the pin angles (degree). ``offset`` is the shaft head's in q."""
+    k, c = d.fuselage_stiffness, d.fuselage_damping
+
+    def sample() -> np.ndarray:
+        q, v = integ.q, integ.v
+        x = q[offset : offset + 3]
+        xd = v[offset : offset + 3]
+        cm, phis = absorbers(q, integ.t)
+        f = k * x + c * xd  # force the springs and dampers pass to the fuselage
+        return np.array([integ.t, x[0], x[1], f[0], f[1], cm[0], cm[1], *np.degrees(phis)])
+    return sample
+
+
+def recorded_outputs(omega: float, data: np.ndarray) -> dict[str, np.ndarray]:
+    """The declared time series of a recording: ``data``'s rows are time (s), the hub centre
+    x, y (m) and the force on the fuselage x, y (N), fixed frame; the tuning masses' centre of
+    mass x, y (m); the pin angles (degree) (:func:`simulate`'s samples,
+    :func:`reduced_samples`' rows)."""
+    t = data[:, 0]
+    x_rot, y_rot = to_rotating(omega, t, data[:, 1], data[:, 2])
+    return {
+        "time": t,
+        "bifilar": np.arange(N_BIFILARS),
+        "hub_x_fixed": data[:, 1],
+        "hub_y_fixed": data[:, 2],
+        "hub_x_rotating": x_rot,
+        "hub_y_rotating": y_rot,
+        "hub_force_x_fixed": data[:, 3],
+        "hub_force_y_fixed": data[:, 4],
+        "bifilar_cm_x_fixed": data[:, 5],
+        "bifilar_cm_y_fixed": data[:, 6],
+        "pin_angle": data[:, 7:].T,
+    }
 
 
 def symmetry(system: System, hub, shaft, parts) -> CyclicSymmetry:

@@ -170,6 +170,105 @@ def _pin_center(holes: Holes, gam: NDArray[np.complex128]) -> NDArray[np.complex
     return p0x + 1j * p0y + 0.5 * (gam - (vx + 1j * vy))
 
 
+class HarmonicBalance:
+    """The periodic-response equations of ``model`` on σ_0's harmonics 0…``harmonics``
+    (module docstring), sampled at ``samples`` times a revolution.
+
+    The unknowns are real: x = (s_0, Re s_1, Im s_1, …, Re s_H, Im s_H) (rad, σ_0's
+    harmonics); :meth:`residual` is the swing equation's residual projected on the same
+    harmonics, over the swing's stiffness K (rad).
+
+    Raises
+    ------
+    ValueError
+        For ``samples`` not a multiple of the N sectors or not above 2 ``harmonics``, or a
+        shear tone that is not a multiple of NΩ below the samples' Nyquist order.
+    """
+
+    def __init__(self, model: ReducedHub, harmonics: int = HARMONICS,
+                 samples: int = SAMPLES) -> None:
+        n_sec = len(model.azimuths)
+        if samples % n_sec or samples <= 2 * harmonics:
+            raise ValueError(f"samples = {samples} must be a multiple of the {n_sec} sectors "
+                             f"and exceed 2 × harmonics = {2 * harmonics}")
+        self.model, self.harmonics, self.samples = model, harmonics, samples
+        omega, m = model.hub_speed, samples
+        self.t = 2 * np.pi / omega * np.arange(m) / m
+        self.full = np.fft.fftfreq(m, 1.0 / m).round().astype(int)  # signed sample orders
+        self.hub_live = ((self.full % n_sec == 0) & (self.full != 0)
+                         & (np.abs(self.full) < m // 2))
+        live = self.hub_live
+        self.w = w = self.full * omega
+        self.hub_gain = np.zeros(m, dtype=complex)
+        self.hub_gain[live] = 1.0 / (model.stiffness + 1j * w[live] * model.damping
+                                     - w[live] ** 2 * model.hub_mass)
+        self.tones = np.zeros(m, dtype=complex)
+        for wj, fj in zip(model.whirl, model.force, strict=True):
+            order = round(wj / omega)
+            if abs(wj / omega - order) > 1e-9 or order % n_sec or not 0 < abs(order) < m // 2:
+                raise ValueError(f"whirl {wj!r} rad/s must be a multiple of {n_sec}Ω below "
+                                 f"{m // 2}Ω")
+            self.tones[order % m] += fj
+        g = model.holes.geometry
+        self.shift = m // n_sec
+        self.psis = [omega * self.t + a for a in model.azimuths]
+        self.stiff = model.hub_speed**2 * model.holes.rho_v * (
+            g.tuning_mass * (g.arm_radius + g.cm_offset) + g.pin_mass * g.arm_radius)
+
+    def unknowns(self, guess: Array) -> Array:
+        """x of σ_0 given at the samples (``guess``, shape (samples,))."""
+        if np.shape(guess) != (self.samples,):
+            raise ValueError(f"guess has shape {np.shape(guess)}: must be ({self.samples},), "
+                             "σ_0 at the samples")
+        s0 = np.fft.rfft(np.asarray(guess, dtype=float))[: self.harmonics + 1] / self.samples
+        return np.concatenate([s0[:1].real, np.column_stack([s0[1:].real, s0[1:].imag]).ravel()])
+
+    def hub_of(self, gam: NDArray[np.complex128], fraction: float = 1.0
+               ) -> NDArray[np.complex128]:
+        """z's harmonics (signed orders of the samples) under a fraction of the shears, from
+        bifilar 0's Γ at the samples: bifilar k's is the same a sector later (rolled)."""
+        g, m = self.model.holes.geometry, self.samples
+        moment = g.tuning_mass * gam + 2 * g.pin_mass * _pin_center(self.model.holes, gam)
+        reaction = sum(np.exp(1j * psi) * np.roll(moment, -k * self.shift)
+                       for k, psi in enumerate(self.psis))
+        return self.hub_gain * (fraction * self.tones + self.w**2 * np.fft.fft(reaction) / m)
+
+    def fields(self, x: Array) -> tuple[Array, Array, Array]:
+        """σ_0, σ̇_0, σ̈_0 at the samples."""
+        m = self.samples
+        s = _spectrum(x)
+        spec = np.zeros(m // 2 + 1, dtype=complex)
+        spec[: self.harmonics + 1] = s * m
+        spec[0] = s[0].real * m
+        iw = 1j * self.model.hub_speed * np.arange(m // 2 + 1)
+        return tuple(np.fft.irfft(spec * iw**j, m) for j in range(3))
+
+    def residual(self, x: Array, fraction: float = 1.0) -> Array:
+        """The swing equation's residual harmonics over K (rad), same layout as x, with a
+        ``fraction`` of the shears."""
+        m = self.samples
+        sig, sig_d, sig_dd = self.fields(x)
+        terms = path_terms(self.model.holes, sig)
+        zdd = np.fft.ifft(-(self.w**2) * self.hub_of(terms[0], fraction)) * m
+        r = (np.fft.rfft(_swing_residual(self.model, terms, sig_d, sig_dd, zdd, self.psis[0]))
+             [: self.harmonics + 1] / (m * self.stiff))
+        return np.concatenate([r[:1].real, np.column_stack([r[1:].real, r[1:].imag]).ravel()])
+
+    def solution(self, x: Array) -> PeriodicSwing:
+        """The :class:`PeriodicSwing` of the unknowns ``x``."""
+        full, live = self.full, self.hub_live
+        zz = self.hub_of(path_terms(self.model.holes, self.fields(x)[0])[0])
+        kept = live | (full == 0)
+        idx = np.nonzero(kept)[0][np.argsort(full[kept])]
+        return PeriodicSwing(self.model, _spectrum(x), full[idx], zz[idx],
+                             float(np.max(np.abs(self.residual(x)))))
+
+
+def _spectrum(x: Array) -> NDArray[np.complex128]:
+    """σ_0's complex harmonics 0…H of the real unknowns x."""
+    return np.concatenate([x[:1], x[1::2] + 1j * x[2::2]])
+
+
 def periodic_swing(model: ReducedHub, guess: Array, harmonics: int = HARMONICS,
                    samples: int = SAMPLES) -> PeriodicSwing:
     """The periodic response of ``model`` by harmonic balance (module docstring), from
@@ -182,71 +281,8 @@ def periodic_swing(model: ReducedHub, guess: Array, harmonics: int = HARMONICS,
     RuntimeError
         If no solution is found (the message says how far it got).
     """
-    n_sec = len(model.azimuths)
-    if samples % n_sec or samples <= 2 * harmonics:
-        raise ValueError(f"samples = {samples} must be a multiple of the {n_sec} sectors and "
-                         f"exceed 2 × harmonics = {2 * harmonics}")
-    if np.shape(guess) != (samples,):
-        raise ValueError(f"guess has shape {np.shape(guess)}: must be ({samples},), σ_0 at the "
-                         "samples")
-    omega = model.hub_speed
-    m = samples
-    t = 2 * np.pi / omega * np.arange(m) / m
-    n = np.arange(harmonics + 1)
-    full = np.fft.fftfreq(m, 1.0 / m).round().astype(int)  # signed orders of the samples
-    hub_live = (full % n_sec == 0) & (full != 0) & (np.abs(full) < m // 2)
-    w = full * omega
-    hub_gain = np.zeros(m, dtype=complex)
-    hub_gain[hub_live] = 1.0 / (model.stiffness + 1j * w[hub_live] * model.damping
-                                - w[hub_live] ** 2 * model.hub_mass)
-    tones = np.zeros(m, dtype=complex)
-    for wj, fj in zip(model.whirl, model.force, strict=True):
-        order = round(wj / omega)
-        if abs(wj / omega - order) > 1e-9 or order % n_sec or not 0 < abs(order) < m // 2:
-            raise ValueError(f"whirl {wj!r} rad/s must be a multiple of {n_sec}Ω below "
-                             f"{m // 2}Ω")
-        tones[order % m] += fj
-    g = model.holes.geometry
-    shift = m // n_sec
-    psis = [omega * t + a for a in model.azimuths]
-    stiff = model.hub_speed**2 * model.holes.rho_v * (
-        g.tuning_mass * (g.arm_radius + g.cm_offset) + g.pin_mass * g.arm_radius)
-
-    def spectrum(x: Array) -> NDArray[np.complex128]:
-        return np.concatenate([x[:1], x[1::2] + 1j * x[2::2]])
-
-    def hub_of(gam: NDArray[np.complex128], fraction: float = 1.0) -> NDArray[np.complex128]:
-        # z's harmonics (signed orders of the samples) under a fraction of the shears, from
-        # bifilar 0's Γ at the samples: bifilar k's is the same a sector later (rolled)
-        moment = g.tuning_mass * gam + 2 * g.pin_mass * _pin_center(model.holes, gam)
-        reaction = sum(np.exp(1j * psi) * np.roll(moment, -k * shift)
-                       for k, psi in enumerate(psis))
-        return hub_gain * (fraction * tones + w**2 * np.fft.fft(reaction) / m)
-
-    def fields(x: Array) -> tuple[Array, Array, Array]:  # σ_0, σ̇_0, σ̈_0 at the samples
-        s = spectrum(x)
-        spec = np.zeros(m // 2 + 1, dtype=complex)
-        spec[: harmonics + 1] = s * m
-        spec[0] = s[0].real * m
-        iw = 1j * omega * np.arange(m // 2 + 1)
-        return tuple(np.fft.irfft(spec * iw**j, m) for j in range(3))
-
-    def residual(x: Array, fraction: float) -> Array:
-        sig, sig_d, sig_dd = fields(x)
-        terms = path_terms(model.holes, sig)
-        zdd = np.fft.ifft(-(w**2) * hub_of(terms[0], fraction)) * m
-        r = np.fft.rfft(_swing_residual(model, terms, sig_d, sig_dd, zdd, psis[0]))[n] / (m * stiff)
-        return np.concatenate([r[:1].real, np.column_stack([r[1:].real, r[1:].imag]).ravel()])
-
-    s0 = np.fft.rfft(np.asarray(guess, dtype=float))[n] / m
-    x0 = np.concatenate([s0[:1].real, np.column_stack([s0[1:].real, s0[1:].imag]).ravel()])
-    sol = _solve(residual, x0)
-    zz = hub_of(path_terms(model.holes, fields(sol)[0])[0])
-    orders = full[hub_live | (full == 0)]
-    keep = np.argsort(orders)
-    idx = np.nonzero(hub_live | (full == 0))[0][keep]
-    return PeriodicSwing(model, spectrum(sol), full[idx], zz[idx],
-                         float(np.max(np.abs(residual(sol, 1.0)))))
+    balance = HarmonicBalance(model, harmonics, samples)
+    return balance.solution(_solve(balance.residual, balance.unknowns(guess)))
 
 
 def _newton(residual, x: Array, fraction: float) -> tuple[Array, float]:
@@ -292,3 +328,65 @@ def _solve(residual, x0: Array) -> Array:
             return x
     raise RuntimeError(f"the harmonic balance did not converge (residual {best:.2e} rad > "
                        f"{TOLERANCE:g})")
+
+
+# The equations of motion of all 2 + N coordinates, for the stability of a periodic response:
+# its perturbations need not share the response's sector symmetry.
+STATE_STEP = 1e-7  # central-difference step of the linearization (m, rad; m/s, rad/s)
+
+
+def accelerations(model: ReducedHub, t: float, y: Array) -> Array:
+    """ẏ of the state y = (x, y, σ_0…σ_{N−1}, ẋ, ẏ, σ̇_0…σ̇_{N−1}) (m, rad, m/s, rad/s) at time
+    ``t`` (s): the module docstring's equations solved for the accelerations.
+
+    The hub's equation with d²/dt²(e^{iψ}P) written out (P' = (m_b + m_p)Γ', the pins' centres
+    moving at half the mass's rate) and the swing equations share the accelerations through
+    the symmetric mass matrix [[m_z I, B], [Bᵀ, diag J(σ_k)]], B's column k being
+    (m_b + m_p)(Re, Im) e^{iψ_k}Γ'_k.
+    """
+    g = model.holes.geometry
+    n = len(model.azimuths)
+    omega = model.hub_speed
+    sig, sig_d = y[2: 2 + n], y[4 + n:]
+    z, zd = y[0] + 1j * y[1], y[2 + n] + 1j * y[3 + n]
+    psi = omega * t + model.azimuths
+    terms = path_terms(model.holes, sig)
+    gam, d1, d2 = terms
+    rot = np.exp(1j * psi)
+    mbp = g.tuning_mass + g.pin_mass
+    moment = g.tuning_mass * gam + 2 * g.pin_mass * _pin_center(model.holes, gam)
+    force = np.sum(model.force * np.exp(1j * model.whirl * t))
+    hub_rhs = (force - model.damping * zd - model.stiffness * z
+               - np.sum(rot * (-omega**2 * moment + 2j * omega * mbp * d1 * sig_d
+                               + mbp * d2 * sig_d**2)))
+    # the swing equations' terms other than the accelerations' (σ̈ = 0, z̈ = 0)
+    swing_rhs = -_swing_residual(model, terms, sig_d, np.zeros(n), np.zeros(n), psi)
+    c_j = g.tuning_mass + 0.5 * g.pin_mass + 2 * g.pin_inertia / g.pin_diameter**2
+    coupling = mbp * rot * d1
+    mass = np.zeros((2 + n, 2 + n))
+    mass[0, 0] = mass[1, 1] = model.hub_mass
+    mass[0, 2:] = mass[2:, 0] = coupling.real
+    mass[1, 2:] = mass[2:, 1] = coupling.imag
+    mass[2:, 2:] = np.diag(c_j * np.abs(d1) ** 2)
+    acc = np.linalg.solve(mass, np.concatenate([[hub_rhs.real, hub_rhs.imag], swing_rhs]))
+    return np.concatenate([y[2 + n:], acc])
+
+
+def periodic_state(sol: PeriodicSwing, t: float | Array) -> Array:
+    """The state of :func:`accelerations` on the periodic response ``sol`` at ``t`` (s):
+    shape (len(t), 2 (2 + N)), or (2 (2 + N),) for a scalar ``t``."""
+    tt = np.atleast_1d(np.asarray(t, dtype=float))
+    n = len(sol.model.azimuths)
+    z, zd = sol.center(tt), sol.center(tt, derivative=1)
+    cols = [z.real, z.imag, *(sol.sigma(tt, k) for k in range(n)),
+            zd.real, zd.imag, *(sol.sigma(tt, k, derivative=1) for k in range(n))]
+    y = np.column_stack(cols)
+    return y[0] if np.ndim(t) == 0 else y
+
+
+def linearization(model: ReducedHub, t: float, y: Array, step: float = STATE_STEP) -> Array:
+    """∂ẏ/∂y of :func:`accelerations` at (t, y), by central differences (``step``; the
+    truncation error ~ step² relative, the roundoff ~ 1e-16/step)."""
+    cols = [(accelerations(model, t, y + step * e) - accelerations(model, t, y - step * e))
+            / (2 * step) for e in np.eye(len(y))]
+    return np.column_stack(cols)

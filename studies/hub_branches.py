@@ -1,0 +1,344 @@
+"""Branches of the hub model's periodic response, with their Floquet stability.
+
+A branch (:mod:`studies.branches`) follows the hub's periodic response in one numeric
+parameter by pseudo-arclength continuation (:func:`solver.continuation.continue_branch`), so
+that it turns around the folds of a softening or hardening absorber, by either of two methods:
+
+``harmonic_balance`` (free bifilars)
+    The exact equations on swing coordinates (:mod:`studies.reduced_hub`) solved for σ_0's
+    harmonics 0…24 on 128 samples a revolution (their residual ~1e-10 of the swing's
+    accelerations, where the start's 12 on 64 leave 6e-5). Stability by Hill's method
+    (:func:`solver.floquet.hill_multipliers`) on the linearization of all 2 + N coordinates
+    (:func:`studies.reduced_hub.linearization`): the perturbations need not share the
+    response's sector symmetry.
+``shooting`` (any ``bifilar``)
+    The multibody model itself, on the quarter-revolution map in minimal coordinates: the
+    hub centre's position and velocity and each bifilar's pin angle and rate (12 numbers) give
+    a consistent multibody state (:func:`studies.hub.build`), a quarter revolution is marched,
+    the bifilars are renumbered (bifilar k + 1 takes bifilar k's place) and the same 12
+    numbers read back. Its Jacobian, by finite differences, is the Newton matrix of the
+    corrector and, at the solution, the quarter-revolution monodromy matrix in coordinates
+    that satisfy the constraints by construction: its eigenvalues to the fourth power are the
+    revolution's Floquet multipliers with the constraint directions removed.
+
+Each point carries the outputs ``simulate`` would archive for that periodic response (from the
+exact solution or one recorded revolution of the multibody model), so a branch archives the
+same harmonics as a case.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+
+import numpy as np
+import xarray as xr
+
+from solver.composition import Composed
+from solver.continuation import continue_branch
+from solver.floquet import hill_multipliers, multipliers
+from solver.integrators import make_integrator
+from solver.system import System
+from studies import hub
+from studies.absorbers import N_BIFILARS, AbsorberProbe, AbsorberStart
+from studies.bifilar import pin_angle
+from studies.branches import BranchPoint, Continuation
+from studies.holes import MAX_TANGENT_ANGLE
+from studies.parameters import ParameterError, Parameters
+from studies.reduced_hub import (
+    HarmonicBalance,
+    PeriodicSwing,
+    linearization,
+    periodic_state,
+    tangent_angle,
+)
+
+Z = np.array([0.0, 0.0, 1.0])
+BALANCE_HARMONICS = 24  # σ_0's harmonics on a branch (module docstring)
+BALANCE_SAMPLES = 128
+HILL_HARMONICS = 16  # harmonics of Hill's matrix (its multipliers vs the monodromy's: tests)
+OUTPUT_SAMPLES = 64  # samples of the revolution a harmonic-balance point archives
+# a multiplier this far outside the unit circle, or closer, counts as on it (stable): the
+# accuracy Hill's method and the shooting Jacobian give the multipliers to (tests)
+STABILITY_MARGIN = 1e-6
+SHOOTING_STEP = 1e-6  # finite-difference step of the shooting map (m·Ω⁻¹… scaled, see _scales)
+SHOOTING_TOLERANCE = 1e-9  # the map's residual over the unknowns' scales at a solution
+
+
+def branch(p: Parameters, c: Continuation) -> list[BranchPoint]:
+    """The hub's branch of periodic responses from ``p`` (the continued parameter at
+    ``c.start``) as ``c`` says: harmonic balance for free bifilars (``method = "auto"``),
+    shooting otherwise.
+
+    Raises
+    ------
+    ParameterError
+        For a method the case's absorber has no equations for.
+    RuntimeError
+        If the first point is not found.
+    """
+    method = c.method
+    if method == "auto":
+        method = "harmonic_balance" if p.bifilar == "free" else "shooting"
+    if method == "harmonic_balance":
+        if p.bifilar != "free":
+            raise ParameterError(f"method = 'harmonic_balance' needs bifilar = 'free' (its "
+                                 f"swing coordinates); got {p.bifilar!r}: use 'shooting'")
+        return balance_branch(p, c)
+    if p.bifilar == "equivalent":
+        raise ParameterError("bifilar = 'equivalent' has no branches: its response is linear "
+                             "(studies.equivalent gives it in closed form)")
+    return shooting_branch(p, c)
+
+
+def _varied(p: Parameters, name: str) -> Callable[[float], Parameters | None]:
+    """p with parameter ``name`` set to a value, or None where that value is invalid (the
+    branch stops there)."""
+    def at(value: float) -> Parameters | None:
+        try:
+            return p.replace(**{name: float(value)})
+        except ParameterError:
+            return None
+    return at
+
+
+def _swing_limit_exceeded(sol: PeriodicSwing) -> bool:
+    """Whether the swing turns the path's tangent beyond the holes' extent."""
+    t = 2 * np.pi / sol.model.hub_speed * np.arange(BALANCE_SAMPLES) / BALANCE_SAMPLES
+    return bool(np.abs(tangent_angle(sol.model.holes, sol.sigma(t))[0]).max()
+                > MAX_TANGENT_ANGLE)
+
+
+def balance_branch(p: Parameters, c: Continuation) -> list[BranchPoint]:
+    """The branch by harmonic balance on swing coordinates (module docstring)."""
+    at = _varied(p, c.parameter)
+    cache: dict[float, HarmonicBalance | None] = {}
+
+    def balance(value: float) -> HarmonicBalance | None:
+        if value not in cache:
+            if len(cache) > 8:
+                cache.clear()
+            q = at(value)
+            cache[value] = (None if q is None else HarmonicBalance(
+                hub.reduced_model(q, hub.design(q)), BALANCE_HARMONICS, BALANCE_SAMPLES))
+        return cache[value]
+
+    def residual(x: np.ndarray, value: float) -> np.ndarray:
+        b = balance(value)
+        return np.full(len(x), np.nan) if b is None else b.residual(x)
+
+    p0 = at(c.start)
+    d0 = hub.design(p0)
+    guess = hub.reduced_response(p0, d0)  # the start's solve (from the linear response)
+    b0 = balance(c.start)
+    x0 = b0.unknowns(guess.sigma(b0.t))
+    t0 = time.perf_counter()
+    found = continue_branch(residual, x0, c.start, c.stop, step=c.step, min_step=c.min_step,
+                            max_step=c.max_step, max_points=c.max_points)
+    points = []
+    note = "" if found.complete else f"branch ended early: {found.reason}"
+    for pt in found.points:
+        q = at(pt.parameter)
+        sol = balance(pt.parameter).solution(pt.x)
+        if _swing_limit_exceeded(sol):
+            note = (f"branch ended at {c.parameter} = {pt.parameter:g}: the swing turns the "
+                    f"path beyond the holes' {np.degrees(MAX_TANGENT_ANGLE):g}°")
+            break
+        mult = balance_multipliers(sol)
+        d = hub.design(q)
+        facts = _facts(q, d, iterations=pt.iterations, change=sol.residual,
+                       seconds=time.perf_counter() - t0, samples=OUTPUT_SAMPLES)
+        t = 2 * np.pi / q.hub_speed * np.arange(OUTPUT_SAMPLES) / OUTPUT_SAMPLES
+        result = _point_result(q.hub_speed, hub.solution_rows(q, d, sol, t), facts, note)
+        points.append(BranchPoint(pt.parameter, result, mult, _stable(mult), pt.fold))
+    return points
+
+
+def balance_multipliers(sol: PeriodicSwing, harmonics: int = HILL_HARMONICS) -> np.ndarray:
+    """The revolution's Floquet multipliers of the periodic response ``sol`` by Hill's
+    method on the linearization of all 2 + N coordinates, largest modulus first."""
+    m = BALANCE_SAMPLES
+    t = 2 * np.pi / sol.model.hub_speed * np.arange(m) / m
+    y = periodic_state(sol, t)
+    a = np.array([linearization(sol.model, ti, yi) for ti, yi in zip(t, y, strict=True)])
+    return hill_multipliers(a, sol.model.hub_speed, harmonics)
+
+
+def _stable(mult: np.ndarray) -> bool:
+    return bool(np.max(np.abs(mult)) <= 1.0 + STABILITY_MARGIN)
+
+
+def _facts(p: Parameters, d: hub.HubDesign, *, iterations: int, change: float,
+           seconds: float, samples: int, revolutions: float = 0.0, steps: int = 0
+           ) -> dict[str, np.generic]:
+    """The hub's declared run facts for a branch point: one revolution recorded at
+    ``samples`` a revolution, ``revolutions`` simulated (0 for the harmonic balance),
+    ``change`` the solution's residual."""
+    return {
+        "run_hub_speed": np.float64(p.hub_speed),
+        "run_revolutions": np.int32(1),
+        "run_samples_per_rev": np.int32(samples),
+        "run_transient_revolutions": np.int32(0),
+        "run_simulated_revolutions": np.float64(revolutions),
+        "run_periodicity_change": np.float64(change),
+        "run_extrapolated": np.int32(0),
+        "run_extrapolation_residual": np.float64(0.0),
+        "run_shooting_restarts": np.int32(0),
+        "run_steps": np.int32(steps),
+        "run_newton_iterations": np.int32(iterations),
+        "run_solver_seconds": np.float64(seconds),
+        "run_richardson": np.int32(0),
+        "run_estimate_revolutions": np.float64(0.0),
+        "run_estimate_samples_per_rev": np.int32(0),
+        "run_substeps": np.int32(0),
+        "tuning_order_linear": np.float64(d.holes.order_linear),
+        "pin_damping": np.float64(d.pin_damping),
+        "effective_fuselage_stiffness": np.float64(d.fuselage_stiffness),
+        "fuselage_damping": np.float64(d.fuselage_damping),
+    }
+
+
+def _point_result(omega: float, rows: np.ndarray, facts: dict[str, np.generic],
+                  note: str) -> xr.Dataset:
+    return hub.SPEC.dataset({**hub.recorded_outputs(omega, rows), **facts},
+                            {"message": note})
+
+
+class QuarterMap:
+    """The multibody hub's quarter-revolution map in minimal coordinates (module docstring):
+    y = (x, y, ẋ, ẏ of the hub centre (m, m/s), the pin angles φ_k, their rates φ̇_k (rad,
+    rad/s)) at t = 0 → the same a quarter revolution later, bifilars renumbered."""
+
+    def __init__(self, p: Parameters) -> None:
+        self.p, self.d = p, hub.design(p)
+        self.steps = p.steps_per_rev // N_BIFILARS
+        self.revolutions = 0.0
+        self.step_count = 0
+
+    def start(self, y: np.ndarray) -> AbsorberStart:
+        n = N_BIFILARS
+        return AbsorberStart(angles=y[4: 4 + n], rates=y[4 + n:],
+                             center=np.array([y[0], y[1], 0.0]),
+                             velocity=np.array([y[2], y[3], 0.0]))
+
+    def integrator(self, y: np.ndarray):
+        """The composed ep integrator of the model built at state ``y``, and its handles."""
+        p = self.p
+        model, hub_body, shaft, parts = hub.build(p, self.d, self.start(y))
+        sysm = System(model)
+        integ = make_integrator(sysm, "ep", 2 * np.pi / p.hub_speed / p.steps_per_rev,
+                                tol=hub.NEWTON_TOL)
+        if p.composition != "none":
+            integ = Composed(integ, p.composition)
+        return integ, sysm, hub_body, shaft, parts
+
+    def read(self, sysm: System, hub_body, shaft, parts, q: np.ndarray,
+             v: np.ndarray) -> np.ndarray:
+        """The minimal coordinates of the multibody state (q, v), in the bifilars' order."""
+        o = sysm.offset[shaft]
+        if self.p.bifilar == "free":
+            w_hub = sysm.angular_velocity(q, v, hub_body)[2]
+            phis = [pin_angle(sysm, b, hub_body, q) for b in parts]
+            rates = [sysm.angular_velocity(q, v, b.link1)[2] - w_hub for b in parts]
+        else:  # locked and equivalent: the swing is not a coordinate of the map
+            phis = rates = [0.0] * N_BIFILARS
+        return np.concatenate([q[o: o + 2], v[o: o + 2], phis, rates])
+
+    def __call__(self, y: np.ndarray) -> np.ndarray:
+        integ, sysm, hub_body, shaft, parts = self.integrator(y)
+        for _ in range(self.steps):
+            info = integ.step()
+            if not info.converged:
+                raise RuntimeError(f"time step failed at t = {integ.t:.6g} s: {info.message}")
+        self.revolutions += 1 / N_BIFILARS
+        self.step_count += self.steps
+        out = self.read(sysm, hub_body, shaft, parts, integ.q, integ.v)
+        n = N_BIFILARS
+        # bifilar k's place a quarter revolution on is bifilar k + 1's at t = 0
+        out[4: 4 + n] = np.roll(out[4: 4 + n], 1)
+        out[4 + n:] = np.roll(out[4 + n:], 1)
+        return out
+
+
+def _scales(p: Parameters) -> np.ndarray:
+    """Scales of the minimal coordinates: the hub's static deflection under the 3P shear,
+    1° of swing, times Ω for the rates."""
+    k, _ = hub.fuselage(p)
+    z = max(p.excitation_3p, p.excitation_5p, 1.0) / k
+    s = np.array([z, z, z * p.hub_speed * 4, z * p.hub_speed * 4,
+                  *[np.radians(1.0)] * N_BIFILARS, *[np.radians(1.0) * p.hub_speed * 3]
+                  * N_BIFILARS])
+    return s
+
+
+def shooting_branch(p: Parameters, c: Continuation) -> list[BranchPoint]:
+    """The branch by shooting on the multibody model's quarter-revolution map (module
+    docstring)."""
+    at = _varied(p, c.parameter)
+    p0 = at(c.start)
+    d0 = hub.design(p0)
+    start, _ = hub.initial_start(p0, d0)
+    scale = _scales(p0)
+    free = p.bifilar == "free"
+    live = np.ones(len(scale), dtype=bool) if free else np.arange(len(scale)) < 4
+    maps: dict[float, QuarterMap | None] = {}
+
+    def quarter(value: float) -> QuarterMap | None:
+        if value not in maps:
+            if len(maps) > 4:
+                maps.clear()
+            q = at(value)
+            maps[value] = None if q is None else QuarterMap(q)
+        return maps[value]
+
+    def full(u: np.ndarray) -> np.ndarray:
+        y = np.zeros(len(scale))
+        y[live] = u * scale[live]
+        return y
+
+    def residual(u: np.ndarray, value: float) -> np.ndarray:
+        qm = quarter(value)
+        if qm is None:
+            return np.full(len(u), np.nan)
+        try:
+            y = full(u)
+            return (qm(y) - y)[live] / scale[live]
+        except RuntimeError:
+            return np.full(len(u), np.nan)
+
+    y0 = np.concatenate([start.center[:2], start.velocity[:2], start.angles, start.rates])
+    u0 = y0[live] / scale[live]
+    t0 = time.perf_counter()
+    found = continue_branch(residual, u0, c.start, c.stop, step=c.step, min_step=c.min_step,
+                            max_step=c.max_step, max_points=c.max_points,
+                            tolerance=SHOOTING_TOLERANCE)
+    note = "" if found.complete else f"branch ended early: {found.reason}"
+    points = []
+    for pt in found.points:
+        q = at(pt.parameter)
+        # the quarter-revolution monodromy in the scaled coordinates: J_x = M_s − I
+        mult = multipliers(pt.jacobian + np.eye(len(pt.x))) ** N_BIFILARS
+        mult = mult[np.argsort(-np.abs(mult))]
+        qm = quarter(pt.parameter) or QuarterMap(q)
+        rows = _record(qm, full(pt.x))
+        facts = _facts(q, qm.d, iterations=pt.iterations,
+                       change=float(np.max(np.abs(residual(pt.x, pt.parameter)))),
+                       seconds=time.perf_counter() - t0, samples=q.steps_per_rev,
+                       revolutions=qm.revolutions, steps=qm.step_count)
+        points.append(BranchPoint(pt.parameter, _point_result(q.hub_speed, rows, facts, note),
+                                  mult, _stable(mult), pt.fold))
+    return points
+
+
+def _record(qm: QuarterMap, y: np.ndarray) -> np.ndarray:
+    """One revolution of the multibody model from the periodic state ``y``, sampled after
+    each step as :func:`studies.hub.simulate` samples it."""
+    integ, sysm, hub_body, shaft, parts = qm.integrator(y)
+    sample = hub.recorder(integ, qm.d, AbsorberProbe(sysm, parts, hub_body), sysm.offset[shaft])
+    rows = []
+    for _ in range(qm.p.steps_per_rev):
+        integ.step()
+        rows.append(sample())
+    qm.revolutions += 1
+    qm.step_count += qm.p.steps_per_rev
+    return np.array(rows)
