@@ -40,6 +40,7 @@ out-of-plane motion) from getting an arbitrary tiny scale.
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -363,34 +364,41 @@ def continue_branch(residual: Residual, x0: ArrayLike, start: float, stop: float
             h = max(0.5 * h, min_step)
             continue
 
-        lam_old, lam_new = float(y[-1]), float(y_new[-1])
-        if (lam_new - stop) * (lam_old - stop) <= 0.0 and lam_new != lam_old:
-            # λ = stop lies within this step: correct at exactly λ = stop from the point on
-            # the chord where λ = stop (the constraint row e_λ is a natural-parameter step)
-            frac = (stop - lam_old) / (lam_new - lam_old)
-            guess = y + frac * (y_new - y)
-            row = np.zeros(n + 1)
-            row[-1] = 1.0
-            y_end, jx_end, jy_end, its_end, why = problem.correct(guess, row, stop)
-            if y_end is None:
-                failure = f"correction at λ = stop failed: {why}"
-                h *= 0.5
-                continue
-            if t[-1] * t_new[-1] < 0.0:
-                # a fold before the end: keep it (it is within the step)
-                _insert_fold(problem, y, t, h, accept)
-                if len(points) >= max_points:
-                    return Branch(points, "max_points", False)
-            y_end[-1] = stop
-            accept(_point(problem, y_end, jx_end, problem.tangent(jy_end, t_new), False,
-                          its_end))
-            return Branch(points, "reached stop", True)
-
+        # the step's pieces in order of travel: y → (fold →) y_new; the branch ends on the
+        # first piece that reaches λ = stop (with a fold beyond stop, that is the first)
+        pieces = [(y, t, None)]
         if t[-1] * t_new[-1] < 0.0:
-            _insert_fold(problem, y, t, h, accept)
+            fold = _locate_fold(problem, y, t, h)
+            if fold is not None:
+                pieces.append((fold[0], fold[2], fold))
+        pieces.append((y_new, t_new, None))
+        new: list[BranchPoint] = []  # accepted only once the whole step has succeeded
+        finished = failed = False
+        for (ya, ta, _), (yb, _, fold) in itertools.pairwise(pieces):
+            la, lb = float(ya[-1]), float(yb[-1])
+            if (lb - stop) * (la - stop) <= 0.0 and la != lb:
+                end = _end_at_stop(problem, ya, yb, ta, stop)
+                if isinstance(end, str):
+                    failure = f"correction at λ = stop failed: {end}"
+                    failed = True
+                else:
+                    new.append(end)
+                    finished = True
+                break
+            if fold is not None:
+                new.append(_point(problem, fold[0], fold[1], fold[2], True, fold[3]))
+        if failed:
+            h *= 0.5
+            continue
+        if not finished:
+            new.append(_point(problem, y_new, jx_new, t_new, False, its))
+        for p in new:
             if len(points) >= max_points:
                 return Branch(points, "max_points", False)
-        accept(_point(problem, y_new, jx_new, t_new, False, its))
+            accept(p)
+        if finished:
+            return Branch(points, "reached stop", True)
+        lam_new = float(y_new[-1])
         if not low <= lam_new <= high:
             return Branch(points, f"left the parameter range [{low:g}, {high:g}] (the "
                           f"branch turned back) at λ = {lam_new:.10g}", False)
@@ -401,15 +409,30 @@ def continue_branch(residual: Residual, x0: ArrayLike, start: float, stop: float
         y, t = y_new, t_new
 
 
-def _insert_fold(problem: _Problem, y: Array, t: Array, h: float,
-                 accept: Callable[[BranchPoint], None]) -> None:
-    """Locate the fold between y and its corrected successor at arclength h along t, and
-    accept it as a point with ``fold=True``.
+def _end_at_stop(problem: _Problem, ya: Array, yb: Array, ta: Array, stop: float
+                 ) -> BranchPoint | str:
+    """The point at exactly λ = stop between ya and yb (λ = stop between theirs), by Newton
+    with the constraint λ = stop (a natural-parameter correction) from the chord's point at
+    λ = stop; the failure's message if it fails."""
+    frac = (stop - ya[-1]) / (yb[-1] - ya[-1])
+    guess = ya + frac * (yb - ya)
+    row = np.zeros(ya.size)
+    row[-1] = 1.0
+    y_end, jx_end, jy_end, its, why = problem.correct(guess, row, stop)
+    if y_end is None:
+        return why
+    y_end[-1] = stop
+    return _point(problem, y_end, jx_end, problem.tangent(jy_end, ta), False, its)
+
+
+def _locate_fold(problem: _Problem, y: Array, t: Array, h: float
+                 ) -> tuple[Array, Array, Array, int] | None:
+    """The fold between y and its corrected successor at arclength h along t: (y, F_x,
+    tangent, iterations) of the fold, or None if a correction inside the bracket failed (the
+    branch is still right; only the fold's point is missing).
 
     y(s) is the corrected point on the hyperplane t · (y − (y + s t)) = 0; Brent's method
-    finds the s where its tangent's λ-component vanishes. If a correction inside the bracket
-    fails the fold is not inserted (the branch is still right; only the fold's point is
-    missing).
+    finds the s where its tangent's λ-component vanishes.
     """
     cache: dict[float, tuple[Array, Array, Array, int]] = {}
 
@@ -428,6 +451,5 @@ def _insert_fold(problem: _Problem, y: Array, t: Array, h: float,
         if s not in cache:
             t_lam(s)
     except (ArithmeticError, ValueError, RuntimeError):
-        return
-    ys, jx, ts, its = cache[s]
-    accept(_point(problem, ys, jx, ts, True, its))
+        return None
+    return cache[s]

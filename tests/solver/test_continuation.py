@@ -208,6 +208,15 @@ def test_decreasing_parameter_and_the_ends_of_a_branch():
     assert len(folds) == 1 and abs(folds[0].parameter - 1.0) < 1e-12
     assert abs(folds[0].x[0]) < 1e-6
 
+    # a stop just short of the fold: a long step passes stop, turns at the fold and comes back
+    # below stop; the branch still ends at the first crossing of λ = stop, before the fold
+    for step in (0.05, 0.5):
+        near = continue_branch(parabola, [-np.sqrt(0.5)], 0.5, 1.0 - 1e-8, step=step,
+                               min_step=1e-6, max_step=step)
+        assert near.complete and near.points[-1].parameter == 1.0 - 1e-8
+        assert not any(p.fold for p in near.points)
+        assert abs(near.points[-1].x[0] + 1e-4) < 1e-8
+
     def circle(x, lam):
         return np.array([x[0] ** 2 + lam**2 - 1.0])
 
