@@ -23,6 +23,9 @@ Three ways to them, for different callers:
   C. R. Mécanique 338, 510–517) the kept ones are those whose eigenvectors are most
   concentrated on the central block k = 0: the copy shifted by k ω has its coefficients
   shifted by k blocks, so the copy centred on k = 0 is the one the truncation resolves best.
+  Two copies of one exponent (differing by i k ω, k ≠ 0) are not both kept: inside a
+  parametric resonance the copies −σ ± iω/2 of one exponent are as central as each other and
+  would outrank the other exponent σ + iω/2, which would hide the instability.
   The alternative criterion, the n eigenvalues with imaginary parts in (−ω/2, ω/2] closest
   to the real axis, is available as ``selection="strip"``; it fails when exponents lie near
   ±ω/2 (the edge of the strip, e.g. the boundaries of a parametric resonance) and when the
@@ -139,7 +142,8 @@ def hill_exponents(a_samples: ArrayLike, omega: float, harmonics: int, *,
         H: the Floquet solution's periodic factor is truncated to harmonics −H … H.
     selection
         "weight" (default): the n eigenvalues whose eigenvectors have the largest share of
-        their norm on the central block k = 0 (Lazarus & Thomas 2010); "strip": the n
+        their norm on the central block k = 0 (Lazarus & Thomas 2010), at most one copy
+        ρ + i k ω of each exponent; "strip": the n
         eigenvalues with imaginary part in (−ω/2, ω/2] with the smallest |Im|.
 
     Returns
