@@ -314,7 +314,8 @@ def case_summary(ds: xr.Dataset, spec: ModelSpec, n_max: int = N_MAX) -> xr.Data
 
 
 def branch_summary(points: Sequence[Any], spec: ModelSpec, parameter: str,
-                   n_max: int = N_MAX) -> xr.Dataset:
+                   n_max: int = N_MAX,
+                   summaries: Sequence[xr.Dataset] | None = None) -> xr.Dataset:
     """What the archive keeps of one branch: the case summary of each point, stacked.
 
     Parameters
@@ -328,6 +329,8 @@ def branch_summary(points: Sequence[Any], spec: ModelSpec, parameter: str,
         The continued parameter.
     n_max
         Highest harmonic kept (per-rev periodic models).
+    summaries
+        The points' :func:`case_summary`, if made already (then ``n_max`` is theirs).
 
     Returns
     -------
@@ -345,7 +348,8 @@ def branch_summary(points: Sequence[Any], spec: ModelSpec, parameter: str,
     """
     if not points:
         raise ValueError("the branch has no points")
-    summaries = [case_summary(point.result, spec, n_max) for point in points]
+    if summaries is None:
+        summaries = [case_summary(point.result, spec, n_max) for point in points]
     # coords="minimal": the coordinates of the inner dimensions (harmonic, direction, psi, …)
     # are the same at every point and stay unstacked; join="exact" refuses points whose
     # layouts differ (it would pad them with NaN in silence).

@@ -192,14 +192,16 @@ def run_branch(spec: Any, params: Mapping[str, Any],
         raise ModelFailure(f"the branch in {settings.parameter} from {settings.start:g} has "
                            "no points")
     notes: list[str] = []
+    summaries = []
     for k, point in enumerate(points):
         _check_result(point.result)
-        _check_summary(case_summary(point.result, spec),
-                       f" at point {k} ({settings.parameter} = {point.value:g})")
+        summaries.append(case_summary(point.result, spec))
+        _check_summary(summaries[-1], f" at point {k} ({settings.parameter} = {point.value:g})")
         note = str(point.result.attrs.get("message", "")).strip()
         if note and note not in notes:
             notes.append(note)
-    return branch_summary(points, spec, settings.parameter), "; ".join(notes)
+    summary = branch_summary(points, spec, settings.parameter, summaries=summaries)
+    return summary, "; ".join(notes)
 
 
 def _urgent(listener: Any, line: str) -> None:
