@@ -674,9 +674,11 @@ def _branch_legend(fig: Figure, ax: Any) -> None:
 
 def _branch_panels(ds: xr.Dataset, panels: list[tuple[str, xr.DataArray, dict[str, Any]]],
                    parameter: str, cases: Cases, title: str, stem: str, out_dir: Path,
-                   formats: Sequence[str], level: float | None = None) -> list[Path]:
+                   formats: Sequence[str], level: float | None = None,
+                   quantity: str = "") -> list[Path]:
     """A figure of branch curves: one panel per ``(title, values, attrs)``, one curve per ok
-    case against ``parameter`` (``level``: a horizontal line drawn in every panel)."""
+    case against ``parameter`` (``level``: a horizontal line drawn in every panel;
+    ``quantity``: what the vertical axes show, before their units)."""
     ok = [c for c in cases if c.ok]
     cols = 2 if len(panels) > 1 else 1
     rows = -(-len(panels) // cols)
@@ -693,7 +695,8 @@ def _branch_panels(ds: xr.Dataset, panels: list[tuple[str, xr.DataArray, dict[st
         if level is not None:
             ax.axhline(level, color="black", linewidth=0.8, linestyle=":")
         ax.set_title(name, fontsize="medium", wrap=True)
-        ax.set_ylabel(_units_label(units))
+        ax.set_ylabel(f"{quantity} ({_units_label(units)})" if quantity
+                      else _units_label(units))
         ax.set_xlabel(_axis_label(dict(ds[parameter].attrs), parameter))
         ax.grid(True, alpha=0.3)
     for ax in axes[len(panels):]:
@@ -735,7 +738,7 @@ def _branch_figures(ds: xr.Dataset, spec: ModelSpec, cases: Cases, out_dir: Path
             paths += _branch_panels(
                 ds, panels, parameter, cases,
                 f"Harmonics of the {spec.outputs[name].long_name} {along}",
-                f"harmonics_{name}_vs_{parameter}", out_dir, formats)
+                f"harmonics_{name}_vs_{parameter}", out_dir, formats, quantity="amplitude")
     # the scalar results that change along a branch (the run facts, run_*, are not drawn)
     scalars = []
     for name, decl in spec.outputs.items():
