@@ -39,6 +39,7 @@ from pipelines.archive import (
 )
 from pipelines.studyfile import model_version
 from studies.branches import Continuation
+from studies.parameters import ModelSpec
 from studies.progress import reporting
 from studies.registry import resolve_model
 
@@ -161,7 +162,7 @@ def _check_summary(summary: xr.Dataset, where: str = "") -> None:
             "or no motion to measure)")
 
 
-def run_branch(spec: Any, params: Mapping[str, Any],
+def run_branch(spec: ModelSpec, params: Mapping[str, Any],
                continuation: Mapping[str, Any]) -> tuple[xr.Dataset, str]:
     """One branch case: the model's ``branch`` and what the archive keeps of it.
 
