@@ -41,6 +41,19 @@ Consolidated archive
     on the case dimensions and those common to all cases are scalar variables, all with the
     ``units`` and ``long_name`` of their :class:`~studies.parameters.Param`. Data of cases that did
     not finish are NaN (floats) or the ``_FillValue`` -1 (integers).
+
+Branches (a study with a ``[continuation]`` table, :mod:`studies.branches`)
+    Each case is a branch of periodic responses. Its case file (:func:`branch_summary`) holds
+    the case summary of every point stacked along the dimension ``point`` (coordinate: the
+    point's number from ``start``; scalars that are the same at every point are stacked too),
+    and per point the continued parameter's value as a variable named like the parameter
+    (its ``units`` and ``long_name``), ``stable`` and ``fold`` (int8 flags 0/1 with
+    ``flag_values`` and ``flag_meanings``) and ``floquet_multiplier_max`` (the largest
+    modulus of the point's Floquet multipliers; above 1 is unstable). In the consolidated
+    archive the branches of a study, which can differ in length, are padded to the longest:
+    NaN for floats, the ``_FillValue`` -1 for the int8 flags (:func:`open_archive` gives them
+    as floats with NaN there, as for any integer variable). The continued parameter is
+    archived only per point, never as a case coordinate or constant.
 """
 
 from __future__ import annotations
@@ -93,6 +106,19 @@ _WRITER = socket.gethostname().replace(".", "_") or "host"
 COMPRESSION = {"zlib": True, "complevel": 4}
 # Missing value of integer variables (a failed case has no revolution count).
 INT_FILL = -1
+
+# The dimension of a branch's points, and the variables a branch adds per point besides the
+# continued parameter's value (a model parameter or output with one of these names cannot be
+# continued).
+POINT = "point"
+BRANCH_VARIABLES = (POINT, "stable", "fold", "floquet_multiplier_max")
+# The flags of a branch point (int8, CF flag_values / flag_meanings).
+BRANCH_FLAGS = {
+    "stable": ("1 if every Floquet multiplier is inside the unit circle (a stable periodic "
+               "response), else 0", "unstable stable"),
+    "fold": ("1 if the point is a fold (turning point) of the branch in the continued "
+             "parameter, else 0", "no_fold fold"),
+}
 
 # Names the archive itself uses, whatever the model: a model parameter with one of these names (or
 # with the name of one of the model's archived outputs, see :func:`reserved_names`) cannot be
@@ -285,6 +311,68 @@ def case_summary(ds: xr.Dataset, spec: ModelSpec, n_max: int = N_MAX) -> xr.Data
             out[name] = ((), ds[name].values, {"units": units, "long_name": long_name})
     renames = {d: _renamed(d, spec) for d in out.dims if _renamed(d, spec) != d}
     return out.rename(renames) if renames else out
+
+
+def branch_summary(points: Sequence[Any], spec: ModelSpec, parameter: str,
+                   n_max: int = N_MAX,
+                   summaries: Sequence[xr.Dataset] | None = None) -> xr.Dataset:
+    """What the archive keeps of one branch: the case summary of each point, stacked.
+
+    Parameters
+    ----------
+    points
+        The branch (:class:`studies.branches.BranchPoint`, in order from ``start``): each
+        point's ``result`` is what the model's ``simulate`` returns for that response.
+    spec
+        The model.
+    parameter
+        The continued parameter.
+    n_max
+        Highest harmonic kept (per-rev periodic models).
+    summaries
+        The points' :func:`case_summary`, if made already (then ``n_max`` is theirs).
+
+    Returns
+    -------
+    xarray.Dataset
+        :func:`case_summary` of every point along the dimension ``point`` (every variable,
+        also those equal at every point), the continued parameter's value per point (named
+        like the parameter, with its ``units`` and ``long_name``), ``stable`` and ``fold``
+        (int8 0/1 flags) and ``floquet_multiplier_max``.
+
+    Raises
+    ------
+    ValueError
+        If the branch has no points, or a point's result lacks a declared output or has
+        another layout than the others.
+    """
+    if not points:
+        raise ValueError("the branch has no points")
+    if summaries is None:
+        summaries = [case_summary(point.result, spec, n_max) for point in points]
+    # coords="minimal": the coordinates of the inner dimensions (harmonic, direction, psi, …)
+    # are the same at every point and stay unstacked; join="exact" refuses points whose
+    # layouts differ (it would pad them with NaN in silence).
+    out = xr.concat(summaries, dim=POINT, data_vars="all", coords="minimal",
+                    compat="override", join="exact", combine_attrs="override")
+    out.attrs = {}
+    param = spec.parameters[parameter]
+    out[parameter] = ((POINT,), np.array([float(p.value) for p in points]), param.attrs())
+    for name, (long_name, meanings) in BRANCH_FLAGS.items():
+        out[name] = ((POINT,), np.array([bool(getattr(p, name)) for p in points], np.int8),
+                     {"units": "1", "long_name": long_name,
+                      "flag_values": np.array([0, 1], np.int8), "flag_meanings": meanings})
+    out["floquet_multiplier_max"] = (
+        (POINT,), np.array([p.multiplier_max for p in points], dtype=float),
+        {"units": "1", "long_name": "largest modulus of the Floquet multipliers over one "
+         "revolution (above 1: unstable)"})
+    return out.assign_coords({POINT: _point_coord(len(points))})
+
+
+def _point_coord(points: int) -> xr.Variable:
+    return xr.Variable(POINT, np.arange(points, dtype=np.int32),
+                       {"units": "1", "long_name": "point number along the branch, from its "
+                        "start"})
 
 
 def _sample_coord(samples: int) -> xr.Variable:
@@ -490,11 +578,14 @@ def _upsample(values: np.ndarray, samples: int) -> np.ndarray:
     return np.fft.irfft(spectrum, n=samples, axis=-1) * (samples / n)
 
 
-def _pad(values: np.ndarray, axis: int, length: int) -> np.ndarray:
-    """``values`` extended with NaN to ``length`` along ``axis`` (a shorter time history)."""
+def _pad(values: np.ndarray, axis: int, length: int, fill: float = np.nan) -> np.ndarray:
+    """``values`` extended to ``length`` along ``axis`` (a shorter time history, a shorter
+    branch) with ``fill``: NaN (as floats), or an integer fill value (dtype kept)."""
     width = [(0, 0)] * values.ndim
     width[axis] = (0, length - values.shape[axis])
-    return np.pad(values.astype(float), width, constant_values=np.nan)
+    if isinstance(fill, float) and np.isnan(fill):
+        values = values.astype(float)
+    return np.pad(values, width, constant_values=fill)
 
 
 def status_counts(archive: xr.Dataset) -> dict[str, int]:
@@ -564,7 +655,9 @@ def consolidate(
     # whole time history (cases may differ in their number of time steps).
     samples = max((ds.sizes.get("time_in_rev", 0) for _, ds in loaded), default=0)
     steps = max((ds.sizes.get("sample", 0) for _, ds in loaded), default=0)
-    resized = {"time_in_rev": samples, "sample": steps}
+    # (branches: as long as the longest branch)
+    points = max((ds.sizes.get(POINT, 0) for _, ds in loaded), default=0)
+    resized = {"time_in_rev": samples, "sample": steps, POINT: points}
     template: dict[str, xr.Variable] = {}
     inner_coords: dict[str, xr.Variable] = {}
     for _, ds in loaded:
@@ -574,20 +667,26 @@ def consolidate(
                 template[name] = xr.Variable(var.dims, np.empty(tuple(sizes.values()), var.dtype),
                                              var.attrs)
         for name, coord in ds.coords.items():
-            if name not in ("psi", "sample", "time_in_rev") and name not in inner_coords:
+            if (name not in ("psi", "sample", "time_in_rev", POINT)
+                    and name not in inner_coords):
                 inner_coords[name] = coord.variable
     if samples:
         inner_coords["psi"] = _psi_coord(samples)
         inner_coords["time_in_rev"] = _time_in_rev_coord(samples)
     if steps:
         inner_coords["sample"] = _sample_coord(steps)
+    if points:
+        inner_coords[POINT] = _point_coord(points)
 
     data_vars: dict[str, xr.Variable] = {}
     encoding: dict[str, dict[str, Any]] = {}
     for name, var in template.items():
         is_int = np.issubdtype(var.dtype, np.integer)
+        # integers as int32, but 0/1 flags (a branch point's stable, fold) stay int8: INT_FILL
+        # fits either
+        int_type = np.int8 if var.dtype == np.int8 else np.int32
         values = np.full(shape + var.shape, INT_FILL if is_int else np.nan,
-                         dtype=np.int32 if is_int else float)
+                         dtype=int_type if is_int else float)
         for index, ds in loaded:
             if name not in ds:
                 continue
@@ -596,6 +695,9 @@ def consolidate(
                 case_values = _upsample(case_values, samples)
             if "sample" in var.dims and case_values.shape != var.shape:
                 case_values = _pad(case_values, var.dims.index("sample"), steps)
+            if POINT in var.dims and case_values.shape != var.shape:
+                case_values = _pad(case_values, var.dims.index(POINT), points,
+                                   INT_FILL if is_int else np.nan)
             if case_values.shape != var.shape:
                 raise ArchiveError(
                     f"variable {name!r} has shape {case_values.shape} in case "
@@ -622,7 +724,10 @@ def consolidate(
         "units": "s", "long_name": "wall-clock time of the case on its worker",
     })
     encoding["run_wall_time"] = dict(COMPRESSION)
-    data_vars.update(constants)
+    # a per-case variable wins over a constant or coordinate of the same name (a branch's
+    # continued parameter, archived per point)
+    data_vars.update({k: v for k, v in constants.items() if k not in data_vars})
+    coords = {k: v for k, v in coords.items() if k not in data_vars}
 
     archive = xr.Dataset(data_vars, coords={**coords, **inner_coords}, attrs=dict(attrs))
     for name, var in archive.variables.items():

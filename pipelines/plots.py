@@ -39,6 +39,19 @@ For any other model (collar, pendulum): ``results`` (or ``results_vs_<parameter>
 sweep), the declared scalar results against the first numeric swept parameter, or as grouped
 bars over categories, and the declared histories against time (``<figure>``).
 
+For a branch archive (a study with a ``[continuation]`` table: a ``point`` dimension), response
+curves against the continued parameter instead, one curve per case (branch) in its colour,
+stable parts solid, unstable parts dashed and folds marked ``x``:
+
+``harmonics_<output>_vs_<parameter>``
+    For every harmonic output (a history or an in-plane vector), the amplitude of its dominant
+    harmonics (:func:`_dominant_harmonics`, or those asked for), one panel per harmonic (and
+    per direction or other index of the output).
+``results_vs_<parameter>``
+    The declared scalar results that vary along a branch, one panel each.
+``floquet_multiplier_max_vs_<parameter>``
+    The largest Floquet multiplier modulus, with the unit circle's level 1.
+
 Each case has one colour, line style and marker in every figure (by its position in the
 archive), so that coinciding curves stay distinguishable and a case is recognised across
 figures.
@@ -60,7 +73,15 @@ import xarray as xr
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
-from pipelines.archive import STATUS_OK, ArchiveError, _upsample, open_archive, status_counts
+from pipelines.archive import (
+    POINT,
+    STATUS_OK,
+    ArchiveError,
+    _upsample,
+    open_archive,
+    status_counts,
+)
+from studies.harmonics import SUFFIXES, harmonic_names
 from studies.parameters import ModelSpec, Output
 
 
@@ -615,6 +636,129 @@ def _results(ds: xr.Dataset, names: list[str], cases: Cases, out_dir: Path,
     return _save(fig, out_dir, stem, formats)
 
 
+def _branch_curve(ax: Any, x: np.ndarray, y: np.ndarray, stable: np.ndarray, fold: np.ndarray,
+                  color: Any, label: str | None) -> None:
+    """One branch: runs of stable segments solid, of unstable ones dashed, folds marked.
+
+    A segment between two points is stable if both ends are (a fold, a multiplier on the unit
+    circle, counts as stable: the segments on its unstable side are dashed). Padding (NaN)
+    and points without a value are left out.
+    """
+    keep = np.isfinite(x) & np.isfinite(y) & np.isfinite(stable)
+    x, y = x[keep], y[keep]
+    stable, fold = stable[keep] == 1, np.nan_to_num(fold[keep]) == 1
+    if x.size == 1:
+        ax.plot(x, y, "o" if stable[0] else "s", color=color, mfc="none", label=label)
+    segments = stable[:-1] & stable[1:]
+    start = 0
+    for end in range(1, segments.size + 1):
+        if end == segments.size or segments[end] != segments[start]:
+            ax.plot(x[start:end + 1], y[start:end + 1], "-" if segments[start] else "--",
+                    color=color, label=label)
+            label = None
+            start = end
+    if fold.any():
+        ax.plot(x[fold], y[fold], "x", linestyle="none", color=color, markersize=8, mew=2)
+
+
+def _branch_legend(fig: Figure, ax: Any) -> None:
+    """The branches (cases) by colour, and the line styles and fold marker they share."""
+    handles, labels = ax.get_legend_handles_labels()
+    handles += [Line2D([], [], color="0.3", linestyle="-"),
+                Line2D([], [], color="0.3", linestyle="--"),
+                Line2D([], [], color="0.3", marker="x", linestyle="none", mew=2)]
+    labels += ["stable", "unstable", "fold"]
+    ncols = max(1, min(len(labels), 4, 110 // (max(map(len, labels)) + 6)))
+    fig.legend(handles, labels, loc="outside lower center", ncols=ncols, fontsize="small")
+
+
+def _branch_panels(ds: xr.Dataset, panels: list[tuple[str, xr.DataArray, dict[str, Any]]],
+                   parameter: str, cases: Cases, title: str, stem: str, out_dir: Path,
+                   formats: Sequence[str], level: float | None = None,
+                   quantity: str = "") -> list[Path]:
+    """A figure of branch curves: one panel per ``(title, values, attrs)``, one curve per ok
+    case against ``parameter`` (``level``: a horizontal line drawn in every panel;
+    ``quantity``: what the vertical axes show, before their units)."""
+    ok = [c for c in cases if c.ok]
+    cols = 2 if len(panels) > 1 else 1
+    rows = -(-len(panels) // cols)
+    fig = Figure(figsize=(6.0 * cols if cols > 1 else 8.0, 1.8 + 3.4 * rows),
+                 layout="constrained")
+    axes = fig.subplots(rows, cols, squeeze=False).ravel()
+    for ax, (name, values, attrs) in zip(axes, panels, strict=False):
+        scale, units = _display_units(attrs.get("units", ""), values.values)
+        for case in ok:
+            _branch_curve(ax, ds[parameter].isel(case.sel).values,
+                          values.isel(case.sel).values * scale,
+                          ds["stable"].isel(case.sel).values, ds["fold"].isel(case.sel).values,
+                          case.style["color"], case.label)
+        if level is not None:
+            ax.axhline(level, color="black", linewidth=0.8, linestyle=":")
+        ax.set_title(name, fontsize="medium", wrap=True)
+        ax.set_ylabel(f"{quantity} ({_units_label(units)})" if quantity
+                      else _units_label(units))
+        ax.set_xlabel(_axis_label(dict(ds[parameter].attrs), parameter))
+        ax.grid(True, alpha=0.3)
+    for ax in axes[len(panels):]:
+        ax.set_visible(False)
+    fig.suptitle(title, wrap=True)
+    _branch_legend(fig, axes[0])
+    return _save(fig, out_dir, stem, formats)
+
+
+def _branch_figures(ds: xr.Dataset, spec: ModelSpec, cases: Cases, out_dir: Path,
+                    formats: Sequence[str], chosen: Sequence[int] | None) -> list[Path]:
+    """The response curves of a branch archive (see the module documentation)."""
+    parameter = next((n for n in spec.parameters if n in ds and POINT in ds[n].dims), None)
+    if parameter is None:
+        raise ArchiveError("the archive has branches (a point dimension) but no variable of "
+                           "the continued parameter per point")
+    ok = ds["status"] == STATUS_OK
+    along = f"against {ds[parameter].attrs.get('long_name') or parameter}"
+    paths: list[Path] = []
+    signals = sorted({n[:-len(s)] for n in harmonic_names(spec.outputs) for s in SUFFIXES
+                      if n.endswith(s)}, key=list(spec.outputs).index)
+    for name in signals:
+        if f"{name}_amplitude" not in ds:
+            continue
+        var = ds[f"{name}_amplitude"].where(ok)
+        inner = [d for d in var.dims if d not in _case_dims(ds) and d not in (POINT, "harmonic")]
+        harmonic = ds["harmonic"].values
+        picks = [h for h in chosen if h in harmonic] if chosen else _dominant_harmonics(
+            var.transpose(..., "harmonic").values, harmonic)
+        picks = _significant(var, picks)
+        panels = []
+        for k in picks:
+            for entry in itertools.product(*(range(ds.sizes[d]) for d in inner)):
+                sel = dict(zip(inner, entry, strict=True))
+                where = ", ".join(f"{_format(ds[d].values[i])}" for d, i in sel.items())
+                panels.append((f"{k}P" + (f", {where}" if where else ""),
+                               var.isel(sel).sel(harmonic=k), dict(var.attrs)))
+        if panels:
+            paths += _branch_panels(
+                ds, panels, parameter, cases,
+                f"Harmonics of the {spec.outputs[name].long_name} {along}",
+                f"harmonics_{name}_vs_{parameter}", out_dir, formats, quantity="amplitude")
+    # the scalar results that change along a branch (the run facts, run_*, are not drawn)
+    scalars = []
+    for name, decl in spec.outputs.items():
+        if not decl.is_scalar or name.startswith("run_") or name not in ds:
+            continue
+        values = ds[name].where(ok)
+        if POINT in values.dims and bool((values.max(POINT) > values.min(POINT)).any()):
+            scalars.append((decl.long_name or name, values, dict(ds[name].attrs)))
+    if scalars:
+        paths += _branch_panels(ds, scalars, parameter, cases, f"Results {along}",
+                                f"results_vs_{parameter}", out_dir, formats)
+    multiplier = ds["floquet_multiplier_max"]
+    paths += _branch_panels(
+        ds, [("largest Floquet multiplier modulus (above 1: unstable)", multiplier.where(ok),
+              dict(multiplier.attrs))],
+        parameter, cases, f"Stability {along}", f"floquet_multiplier_max_vs_{parameter}",
+        out_dir, formats, level=1.0)
+    return paths
+
+
 def archive_model(ds: xr.Dataset, path: str | os.PathLike[str] = "archive") -> ModelSpec:
     """The model of an archive (its ``model`` attribute), for its output declarations.
 
@@ -667,7 +811,8 @@ def plot_archive(
         Directory for the figures (created if needed).
     harmonics
         Harmonic numbers drawn against the first swept parameter when a Cartesian sweep is too
-        large for bar charts; default: the two largest non-zero harmonics of each quantity.
+        large for bar charts, or against the continued parameter of a branch archive;
+        default: the two largest non-zero harmonics of each quantity.
     formats
         File formats (matplotlib names: ``png``, ``pdf``, ``svg``).
 
@@ -701,6 +846,9 @@ def plot_archive(
         )
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
+    if POINT in archived.dims:
+        # branches: response curves against the continued parameter, nothing per revolution
+        return _branch_figures(archived, spec, _cases(archived), out, formats, harmonics)
     paths: list[Path] = []
     if spec.periodic:
         # response curves need a numeric abscissa; categories (a case list, a string

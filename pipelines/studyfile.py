@@ -29,15 +29,39 @@ cross-checks per case (``ModelSpec.check``, which rejects impossible geometry), 
 combination of the values a cross-check reads checked once (:class:`CrossChecks`). A study
 holds at most :data:`MAX_CASES` cases.
 
+Continuation
+    An optional ``[continuation]`` table makes each case one branch of periodic responses
+    instead of one response: the model's ``ModelSpec.branch`` follows the case's periodic
+    response in one numeric parameter from ``start`` to ``stop`` by continuation (turning at
+    folds) and reports each point's Floquet multipliers and stability
+    (:mod:`studies.branches`)::
+
+        [continuation]
+        parameter = "excitation_3p"   # any numeric parameter of the model
+        start = 0.5
+        stop = 2.0
+        step = 0.02                   # optional: first, least and largest arclength step
+        min_step = 1e-5               #   (the parameter's units; 0 or absent: a 50th, a
+        max_step = 0.1                #   10^5th and a 10th of |stop - start|)
+        max_points = 200              # optional: most points of a branch
+        method = "auto"               # optional: auto, harmonic_balance or shooting
+
+    ``[fixed]``, ``[sweep]`` and ``[[cases]]`` give the cases as without it; each case's
+    parameters hold the continued parameter at ``start``, and the continued parameter may not
+    be given anywhere else in the file (it is the branch's own axis). Only models with a
+    ``branch`` function can be continued. The archive gains a ``point`` dimension
+    (:mod:`pipelines.archive`).
+
 An optional ``[cluster]`` table gives the job resources of ``--cluster slurm|pbs`` (``cores``,
 ``memory``, ``walltime``, ``queue``, ``account``, ``jobs``; see :mod:`pipelines.cluster`); it
 does not change the cases or their ids.
 
 Each case's id is a hash of the model name, the code version (package version and the model's
 ``ModelSpec.version``) and the complete parameters (:func:`make_case_id`): rerunning a study
-computes only the cases without a file, and cases cached by another version of the code or of
-the model are computed again rather than reused. Bump a model's ``version`` when a change to
-it changes its results.
+computes only the cases without a file (a case's ``[continuation]`` settings are part of its
+id, so a changed table computes the branches again), and cases cached by another version of
+the code or of the model are computed again rather than reused. Bump a model's ``version``
+when a change to it changes its results.
 """
 from __future__ import annotations
 
@@ -57,15 +81,18 @@ import numpy as np
 import xarray as xr
 
 from pipelines.archive import (
+    BRANCH_VARIABLES,
     code_version,
     reserved_names,
 )
+from studies.branches import Continuation, continuation_settings
 from studies.parameters import ModelSpec, Param, ParameterError
-from studies.registry import available, resolve_model
+from studies.registry import available, get_model, resolve_model
 
 # Length of the hex case id: 64 bits makes an accidental clash within one study negligible.
 CASE_ID_LENGTH = 16
-TOP_LEVEL_KEYS = ("model", "title", "description", "fixed", "sweep", "cases", "cluster")
+TOP_LEVEL_KEYS = ("model", "title", "description", "fixed", "sweep", "cases", "continuation",
+                  "cluster")
 # The [cluster] table: job resources of --cluster slurm|pbs (pipelines.cluster).
 CLUSTER_KEYS: dict[str, type] = {"cores": int, "memory": str, "walltime": str, "queue": str,
                                  "account": str, "jobs": int}
@@ -86,9 +113,10 @@ def model_version(spec: ModelSpec) -> str:
     return f"bifilar {code_version()}, {spec.name} {spec.version}"
 
 
-def make_case_id(model: str, params: Mapping[str, Any], version: str = "") -> str:
-    """Stable identifier of a case: a hash of the model name, the code version and the
-    complete parameters.
+def make_case_id(model: str, params: Mapping[str, Any], version: str = "",
+                 continuation: Mapping[str, Any] | None = None) -> str:
+    """Stable identifier of a case: a hash of the model name, the code version, the complete
+    parameters and, for a branch, the continuation settings.
 
     JSON with sorted keys and Python's shortest float repr is the same in every process and
     session, so a rerun finds the files of the cases it already computed; another code or model
@@ -102,9 +130,15 @@ def make_case_id(model: str, params: Mapping[str, Any], version: str = "") -> st
         The complete parameters of the case.
     version
         :func:`model_version` of the model.
+    continuation
+        The case's validated ``[continuation]`` settings (:meth:`Continuation.as_dict`), or
+        ``None`` for a case of one response.
     """
-    text = json.dumps({"model": model, "version": version, "parameters": dict(params)},
-                      sort_keys=True)
+    entries: dict[str, Any] = {"model": model, "version": version, "parameters": dict(params)}
+    if continuation is not None:
+        # (only for a branch: the ids of cases of one response do not change)
+        entries["continuation"] = dict(continuation)
+    text = json.dumps(entries, sort_keys=True)
     return hashlib.sha256(text.encode()).hexdigest()[:CASE_ID_LENGTH]
 
 
@@ -162,6 +196,11 @@ class Study:
         For a sweep, the validated values of each swept parameter in file order.
     cases
         All cases, in archive order.
+    cluster
+        The validated ``[cluster]`` table.
+    continuation
+        The validated ``[continuation]`` table: each case is one branch; ``None`` for cases
+        of one response each.
     """
 
     path: Path
@@ -173,6 +212,12 @@ class Study:
     sweep: dict[str, list[Any]]
     cases: tuple[Case, ...]
     cluster: dict[str, Any] = field(default_factory=dict)
+    continuation: Continuation | None = None
+
+    @property
+    def continuation_dict(self) -> dict[str, Any] | None:
+        """The continuation as the worker receives it (a plain dict), or ``None``."""
+        return None if self.continuation is None else self.continuation.as_dict()
 
     def dims(self) -> dict[str, int]:
         """Archive case dimensions and their sizes."""
@@ -189,8 +234,11 @@ class Study:
 
         Every parameter of the model appears once: as a coordinate if it varies between
         cases, as a scalar variable if not, with the units and long_name of its declaration.
+        The continued parameter of a branch study is left out: the archive holds its value per
+        point of each branch, as a variable of the same name.
         """
         params = self.spec.parameters
+        continued = None if self.continuation is None else self.continuation.parameter
         coords: dict[str, xr.Variable] = {}
         if self.kind == "sweep":
             for name, values in self.sweep.items():
@@ -205,7 +253,7 @@ class Study:
             )
         constants: dict[str, xr.Variable] = {}
         for name, param in params.items():
-            if name in coords:
+            if name in coords or name == continued:
                 continue
             values = [c.params[name] for c in self.cases]
             if all(v == values[0] for v in values):
@@ -346,7 +394,9 @@ def load_study(path: str | os.PathLike[str]) -> Study:
         both or neither of ``[sweep]`` and ``[[cases]]``, duplicate cases, more than
         :data:`MAX_CASES` cases (refused before the cases are made), a bad ``[cluster]``
         table, and any case whose complete parameter set the model's cross-checks reject
-        (``ModelSpec.check``).
+        (``ModelSpec.check``); for a ``[continuation]`` table (:func:`_continuation`): a
+        model without a ``branch`` function, a bad key or value, or the continued parameter
+        also given in ``[fixed]``, ``[sweep]`` or a case.
     """
     path = Path(path)
     try:
@@ -390,6 +440,11 @@ def load_study(path: str | os.PathLike[str]) -> Study:
         name: _check_value(f"{src} [fixed]", spec, name, value)
         for name, value in _table(f"{src}: [fixed]", doc.get("fixed", {})).items()
     }
+    continuation = (_continuation(src, spec, doc["continuation"], fixed)
+                    if "continuation" in doc else None)
+    # the continued parameter is the branch's own axis: every case starts its branch there
+    continued = {} if continuation is None else {continuation.parameter: continuation.start}
+    settings = None if continuation is None else continuation.as_dict()
     has_sweep, has_cases = "sweep" in doc, "cases" in doc
     if has_sweep == has_cases:
         raise StudyError(
@@ -404,12 +459,27 @@ def load_study(path: str | os.PathLike[str]) -> Study:
     cross_check = CrossChecks(spec)
 
     def complete(label: str, given: dict[str, Any]) -> dict[str, Any]:
-        params = {**defaults, **given}
+        params = {**defaults, **given, **continued}
         try:
             cross_check(params)
+            if continuation is not None:
+                # the branch's other end, where a combination the model rejects would stop it
+                cross_check({**params, continuation.parameter: continuation.stop})
         except ParameterError as exc:
-            raise StudyError(f"{src}: case {label}: {exc}") from exc
+            where = "" if continuation is None else (
+                f" (with {continuation.parameter} from {continuation.start:g} to "
+                f"{continuation.stop:g})")
+            raise StudyError(f"{src}: case {label}{where}: {exc}") from exc
         return params
+
+    def case_id(params: Mapping[str, Any]) -> str:
+        return make_case_id(spec.name, params, version, settings)
+
+    def not_continued(where: str, name: str) -> None:
+        if name in continued:
+            raise StudyError(f"{where}: {name!r} is the continued parameter of "
+                             "[continuation] (each branch's own axis, from start to stop); "
+                             "remove it here")
 
     cases: list[Case] = []
     sweep: dict[str, list[Any]] = {}
@@ -420,6 +490,7 @@ def load_study(path: str | os.PathLike[str]) -> Study:
             where = f"{src} [sweep]"
             if name in fixed:
                 raise StudyError(f"{where}: {name!r} is both swept and in [fixed]; remove one")
+            not_continued(where, name)
             if not isinstance(values, list):
                 raise StudyError(f"{where}: {name} = {values!r} must be a list of values, "
                                  f"e.g. {name} = [{values!r}]; single values go in [fixed]")
@@ -442,7 +513,7 @@ def load_study(path: str | os.PathLike[str]) -> Study:
             point = {name: sweep[name][i] for name, i in zip(sweep, index, strict=True)}
             label = ", ".join(f"{k}={_format_value(v)}" for k, v in point.items())
             params = complete(label, {**fixed, **point})
-            cases.append(Case(label, params, make_case_id(spec.name, params, version), index))
+            cases.append(Case(label, params, case_id(params), index))
     else:
         kind = "cases"
         entries = doc["cases"]
@@ -472,9 +543,10 @@ def load_study(path: str | os.PathLike[str]) -> Study:
                 if name in fixed:
                     raise StudyError(f"{where}: {name!r} is also in [fixed]; "
                                      "fixed parameters are common to all cases, remove one")
+                not_continued(where, name)
                 given[name] = _check_value(where, spec, name, value)
             params = complete(repr(label), given)
-            cases.append(Case(label, params, make_case_id(spec.name, params, version), (i,)))
+            cases.append(Case(label, params, case_id(params), (i,)))
 
     seen: dict[str, str] = {}
     for case in cases:
@@ -483,7 +555,49 @@ def load_study(path: str | os.PathLike[str]) -> Study:
                              "identical parameters; remove one")
         seen[case.case_id] = case.label
     return Study(path, text, model_ref, spec, title, kind, sweep, tuple(cases),
-                 _cluster_table(src, doc.get("cluster", {})))
+                 _cluster_table(src, doc.get("cluster", {})), continuation)
+
+
+def branch_models() -> list[str]:
+    """The registered models that can follow a branch of their responses (those whose
+    ``ModelSpec.branch`` is set)."""
+    names = []
+    for name in available():
+        try:
+            if get_model(name).branch is not None:
+                names.append(name)
+        except Exception:  # a model that cannot load cannot continue either
+            continue
+    return names
+
+
+def _continuation(src: str, spec: ModelSpec, table: Any,
+                  fixed: Mapping[str, Any]) -> Continuation:
+    """The validated ``[continuation]`` table of a study file (see the module notes)."""
+    where = f"{src} [continuation]"
+    if not isinstance(table, dict):
+        raise StudyError(f"{where} must be a table of key = value entries (parameter, start, "
+                         f"stop, ...), not {type(table).__name__}")
+    if spec.branch is None:
+        able = branch_models()
+        raise StudyError(
+            f"{where}: model {spec.name!r} cannot follow a branch of its responses (its "
+            "ModelSpec has no branch function); models that can: "
+            + (", ".join(able) if able else "none registered; a plug-in model "
+               "('module:ATTRIBUTE') with ModelSpec(branch=...)"))
+    try:
+        settings = continuation_settings(table, spec.parameters, where)
+    except ParameterError as exc:
+        raise StudyError(" ".join(str(exc).split())) from exc
+    if settings.parameter in fixed:
+        raise StudyError(f"{where}: parameter = {settings.parameter!r} is also in [fixed]; the "
+                         "continued parameter runs from start to stop, remove it from [fixed]")
+    clash = sorted(set(BRANCH_VARIABLES) & (set(spec.parameters) | set(spec.outputs)))
+    if clash:
+        raise StudyError(f"{where}: model {spec.name!r} has parameter(s) or output(s) "
+                         f"{', '.join(clash)} whose names a branch archive uses for its own "
+                         "variables; rename them")
+    return settings
 
 
 def _cluster_table(src: str, table: Any) -> dict[str, Any]:

@@ -267,6 +267,7 @@ def _run_cases(study: Study, todo: list[Case], cases_dir: Path, workers: int | N
             [c.params for c in todo],
             paths,
             progress_topic=topic,
+            continuation=study.continuation_dict,
             key=[f"bifilar-case-{c.case_id}" for c in todo],
             pure=False,
         )

@@ -10,6 +10,10 @@ While a case runs, the model's progress lines (:func:`studies.progress.report`: 
 each revolution and its periodicity change) travel from the worker to the sweep's client as
 dask events, and a cold numba cache is announced before the kernels compile
 (:func:`compile_notice`).
+
+A case of a study with a ``[continuation]`` table is one branch: the model's ``branch``
+function runs instead of its ``simulate``, and the case file holds every point of the branch
+(:func:`pipelines.archive.branch_summary`).
 """
 from __future__ import annotations
 
@@ -29,10 +33,13 @@ from pipelines.archive import (
     CONVENTIONS,
     STATUS_FAILED,
     STATUS_OK,
+    branch_summary,
     case_summary,
     write_case,
 )
 from pipelines.studyfile import model_version
+from studies.branches import Continuation
+from studies.parameters import ModelSpec
 from studies.progress import reporting
 from studies.registry import resolve_model
 
@@ -135,6 +142,69 @@ def nan_outputs(summary: xr.Dataset) -> list[str]:
             if var.dtype.kind == "f" and bool(np.isnan(var.values).any())]
 
 
+def _check_result(result: xr.Dataset) -> None:
+    """Raise :class:`ModelFailure` for a result the model marked failed or not converged."""
+    reported = str(result.attrs.get("status", "ok")).lower()
+    if reported in ("failed", str(STATUS_FAILED)):
+        raise ModelFailure(str(result.attrs.get("message", "model reported failure")))
+    if "run_converged" in result and not int(result["run_converged"]):
+        raise ModelFailure("simulation did not converge: "
+                           + str(result.attrs.get("message", "no message")))
+
+
+def _check_summary(summary: xr.Dataset, where: str = "") -> None:
+    """Raise :class:`ModelFailure` if an archived output of a summary came out NaN."""
+    nan = nan_outputs(summary)
+    if nan:
+        raise ModelFailure(
+            f"output(s) {', '.join(nan)}{where} came out NaN (not a number): the model could "
+            "not determine them from this run (e.g. a record too short to measure a period, "
+            "or no motion to measure)")
+
+
+def run_branch(spec: ModelSpec, params: Mapping[str, Any],
+               continuation: Mapping[str, Any]) -> tuple[xr.Dataset, str]:
+    """One branch case: the model's ``branch`` and what the archive keeps of it.
+
+    Parameters
+    ----------
+    spec
+        The model (its ``branch`` is set; :func:`pipelines.studyfile.load_study` checked).
+    params
+        Complete parameters of the case, the continued one at ``start``.
+    continuation
+        The study's validated ``[continuation]`` settings (:meth:`Continuation.as_dict`).
+
+    Returns
+    -------
+    tuple
+        :func:`pipelines.archive.branch_summary` of the branch, and the case's message: the
+        notes of its points' results (e.g. why the branch ended before ``stop``), each once.
+
+    Raises
+    ------
+    ModelFailure
+        If the branch has no points, a point's result is marked failed or not converged, or
+        an archived output of a point came out NaN.
+    """
+    settings = Continuation(**continuation)
+    points = spec.branch(spec.trusted(params), settings)
+    if not points:
+        raise ModelFailure(f"the branch in {settings.parameter} from {settings.start:g} has "
+                           "no points")
+    notes: list[str] = []
+    summaries = []
+    for k, point in enumerate(points):
+        _check_result(point.result)
+        summaries.append(case_summary(point.result, spec))
+        _check_summary(summaries[-1], f" at point {k} ({settings.parameter} = {point.value:g})")
+        note = str(point.result.attrs.get("message", "")).strip()
+        if note and note not in notes:
+            notes.append(note)
+    summary = branch_summary(points, spec, settings.parameter, summaries=summaries)
+    return summary, "; ".join(notes)
+
+
 def _urgent(listener: Any, line: str) -> None:
     try:
         listener(line, urgent=True)
@@ -145,7 +215,8 @@ def _urgent(listener: Any, line: str) -> None:
 def run_case(model_name: str, params: Mapping[str, Any], case_file: str,
              progress_topic: str | None = None,
              progress: Callable[[str], None] | None = None, *, case_id: str | None = None,
-             whole: bool = False) -> dict[str, Any]:
+             whole: bool = False,
+             continuation: Mapping[str, Any] | None = None) -> dict[str, Any]:
     """Run one case and write its case file atomically; the dask task of a sweep.
 
     Any exception of the model (or a result with ``attrs["status"] == "failed"`` or
@@ -173,6 +244,10 @@ def run_case(model_name: str, params: Mapping[str, Any], case_file: str,
     whole
         Write the model's whole result, every variable and its global attributes, instead of
         what the sweep archive keeps of it (the single-model commands' output files).
+    continuation
+        The study's validated ``[continuation]`` settings: the case is one branch
+        (:func:`run_branch`; its points' notes become the case's message), ``whole`` does not
+        apply. ``None``: one response.
 
     Returns
     -------
@@ -198,24 +273,19 @@ def run_case(model_name: str, params: Mapping[str, Any], case_file: str,
                 stack.enter_context(compile_notice(lambda line: _urgent(listener, line)))
             spec = resolve_model(model_name)
             version = model_version(spec)
-            # validated by load_study (or the command) already: the model takes them as given
-            result = spec.run(params)
-        reported = str(result.attrs.get("status", "ok")).lower()
-        if reported in ("failed", str(STATUS_FAILED)):
-            raise ModelFailure(str(result.attrs.get("message", "model reported failure")))
-        if "run_converged" in result and not int(result["run_converged"]):
-            raise ModelFailure("simulation did not converge: "
-                               + str(result.attrs.get("message", "no message")))
-        summary = case_summary(result, spec)
-        nan = nan_outputs(summary)
-        if nan:
-            raise ModelFailure(
-                f"output(s) {', '.join(nan)} came out NaN (not a number): the model could not "
-                "determine them from this run (e.g. a record too short to measure a period, "
-                "or no motion to measure)")
-        # an ok case may carry the model's note (e.g. that shooting fell back to marching)
-        message = str(result.attrs.get("message", ""))
-        if whole:
+            if continuation is not None:
+                summary, message = run_branch(spec, params, continuation)
+            else:
+                # validated by load_study (or the command) already: the model takes them as
+                # given
+                result = spec.run(params)
+        if continuation is None:
+            _check_result(result)
+            summary = case_summary(result, spec)
+            _check_summary(summary)
+            # an ok case may carry the model's note (e.g. that shooting fell back to marching)
+            message = str(result.attrs.get("message", ""))
+        if whole and continuation is None:
             summary = result
             # netCDF has no booleans: the model's flags (converged, …) are kept as 0/1
             model_attrs = {k: int(v) if isinstance(v, bool) else v

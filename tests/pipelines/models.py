@@ -274,3 +274,173 @@ def warm_up_fails() -> None:
 WARM_SPEC = dataclasses.replace(SPEC, name="pipeline-test-warm-up",
                                 warm_up=(warm_up_double, warm_up_fails))
 register(WARM_SPEC)
+
+
+# --- a model with branches (studies.branches): the Duffing oscillator ------------------------
+#
+# x'' + 2ζx' + x + γx³ = F cos(Ωt) in dimensionless time, recorded "per rev": one revolution is
+# one forcing period (ψ = Ωt, so the response is at 1P). Its one-harmonic balance
+# x = A cos(Ωt - φ) has the frequency-response curve [(k - Ω²)² + (2ζΩ)²]A² = F² with
+# k = 1 + ¾γA², solved in closed form for Ω² along the curve parametrized by the amplitude:
+#
+#     Ω² = k - 2ζ² ± sqrt(D),   D = 4ζ⁴ - 4ζ²k + F²/A²,
+#
+# the minus root from the static response (Ω = 0) up to the peak amplitude A_max (D = 0), the
+# plus root beyond it down to A → 0 (Ω → ∞). With A = A_max(1 - u²) and the root's sign that
+# of u the curve is smooth in u. For a hardening spring (γ > 0) strong enough it has two folds
+# (dΩ/du = 0), and the middle branch between them is unstable (the saddle-node rule).
+
+DUFFING_PARAMETERS: dict[str, Param] = {
+    "forcing_frequency": Param(1.0, "1", "forcing frequency over the linear natural frequency",
+                               minimum=0.0, exclusive_minimum=True, maximum=10.0),
+    "damping_ratio": Param(0.05, "1", "damping ratio", minimum=0.0, exclusive_minimum=True,
+                           maximum=0.5),
+    "cubic_stiffness": Param(0.1, "1", "cubic stiffness over the linear stiffness", minimum=0.0,
+                             maximum=10.0),
+    "forcing_amplitude": Param(0.3, "1", "forcing amplitude over the linear stiffness",
+                               minimum=0.0, exclusive_minimum=True),
+    "samples_per_rev": Param(32, "1", "samples per forcing period", minimum=20),
+    "revolutions": Param(1, "1", "forcing periods recorded", minimum=1),
+    "run_log": Param("", "1", "file to which each run appends a line (tests)"),
+    "branch_fail": Param("none", "1", "test failure mode of the branch",
+                         choices=("none", "raise", "empty")),
+}
+
+DUFFING_OUTPUTS: dict[str, Output] = {
+    "time": Output("s", "time", dims=("time",)),
+    "displacement": Output("1", "displacement x", history=True, harmonics=True),
+    "velocity": Output("1", "velocity dx/dt", harmonics=True),
+    "response_amplitude": Output("1", "one-harmonic response amplitude A", dims=()),
+    **{name: RUN_OUTPUTS[name] for name in ("run_hub_speed", "run_revolutions",
+                                            "run_samples_per_rev", "run_transient_revolutions")},
+}
+# Points of the dense curve from which a branch's points are taken.
+DENSE_POINTS = 20_001
+
+
+def _peak_amplitude(zeta: float, gamma: float, force: float) -> float:
+    """A_max, where D = 0: F²/A² = 4ζ²(k - ζ²), the left side falling and the right rising
+    in A (bisection: both monotonic)."""
+    low, high = 1e-12, force / (2 * zeta * np.sqrt(1 - zeta**2)) + 1.0
+    for _ in range(200):
+        mid = 0.5 * (low + high)
+        k = 1 + 0.75 * gamma * mid**2
+        if force**2 / mid**2 - 4 * zeta**2 * (k - zeta**2) > 0:
+            low = mid
+        else:
+            high = mid
+    return 0.5 * (low + high)
+
+
+def duffing_curve(p: Any, omega_cap: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The frequency-response curve from Ω = 0 to beyond ``omega_cap``, densely: (Ω, A, φ)."""
+    zeta, gamma, force = p.damping_ratio, p.cubic_stiffness, p.forcing_amplitude
+    a_max = _peak_amplitude(zeta, gamma, force)
+    # static amplitude: A(1 + ¾γA²) = F, the real root of the cubic
+    roots = np.roots([0.75 * gamma, 0.0, 1.0, -force]) if gamma > 0 else np.array([force])
+    a_static = float(max(r.real for r in roots if abs(r.imag) < 1e-9 and r.real > 0))
+    # far enough down the plus root that Ω > omega_cap (there Ω² ≈ F/A)
+    a_end = min(force / (2.0 * omega_cap**2 + 2.0), 0.5 * a_max)
+    u = np.linspace(-np.sqrt(1 - a_static / a_max), np.sqrt(1 - a_end / a_max), DENSE_POINTS)
+    amplitude = a_max * (1 - u**2)
+    k = 1 + 0.75 * gamma * amplitude**2
+    disc = np.maximum(4 * zeta**4 - 4 * zeta**2 * k + force**2 / amplitude**2, 0.0)
+    omega = np.sqrt(np.maximum(k - 2 * zeta**2 + np.sign(u) * np.sqrt(disc), 0.0))
+    phase = np.arctan2(2 * zeta * omega, k - omega**2)
+    return omega, amplitude, phase
+
+
+def duffing_response(p: Any, omega: float, amplitude: float, phase: float,
+                     message: str = "") -> xr.Dataset:
+    """The one-harmonic periodic response sampled over whole forcing periods, in the layout
+    the model's ``simulate`` returns."""
+    n, revs = p.samples_per_rev, p.revolutions
+    t = np.arange(revs * n) / n * (2 * np.pi / omega)
+    angle = omega * t - phase
+    return DUFFING_SPEC.dataset({
+        "time": t,
+        "displacement": amplitude * np.cos(angle),
+        "velocity": -amplitude * omega * np.sin(angle),
+        "response_amplitude": np.float64(amplitude),
+        "run_hub_speed": np.float64(omega),
+        "run_revolutions": np.int32(revs),
+        "run_samples_per_rev": np.int32(n),
+        "run_transient_revolutions": np.int32(0),
+    }, {"message": message} if message else None)
+
+
+def duffing_simulate(p: Any) -> xr.Dataset:
+    """The response at ``forcing_frequency`` reached from rest at low frequency (the first
+    crossing of the curve: the resonant branch)."""
+    omega, amplitude, phase = duffing_curve(p, p.forcing_frequency + 1.0)
+    i = int(np.argmax(omega >= p.forcing_frequency))
+    return duffing_response(p, p.forcing_frequency, amplitude[i], phase[i])
+
+
+def duffing_branch(p: Any, c: Any) -> list[Any]:
+    """The frequency-response curve from ``c.start`` to ``c.stop``: points every ``c.step`` of
+    arclength in (Ω, A), the folds among them; at most ``c.max_points`` (then the branch ends
+    early and says so in its results' message).
+
+    Floquet multipliers are a stand-in with the right product (Liouville: exp(-2ζT) over a
+    period T): a complex pair of modulus exp(-ζT) on the stable branches, 1 at a fold, a real
+    multiplier above 1 on the middle branch between the folds.
+    """
+    from studies.branches import BranchPoint
+
+    if p.run_log:
+        with open(p.run_log, "a") as log:
+            log.write(json.dumps(p.as_dict(), sort_keys=True) + "\n")
+    if p.branch_fail == "raise":
+        raise RuntimeError("branch failure requested by the test (branch_fail = 'raise')")
+    if p.branch_fail == "empty":
+        return []
+    omega, amplitude, phase = duffing_curve(p, max(c.start, c.stop) + 1.0)
+    slope = np.diff(omega)
+    folds = [i for i in range(1, len(omega) - 1) if slope[i - 1] * slope[i] < 0]
+    order = np.arange(len(omega)) if c.stop > c.start else np.arange(len(omega))[::-1]
+    sign = 1.0 if c.stop > c.start else -1.0
+    first = int(np.argmax(sign * (omega[order] - c.start) >= 0))
+    last = first + int(np.argmax(sign * (omega[order[first:]] - c.stop) >= 0))
+    path = order[first:last + 1]
+    arclength = np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(omega[path]),
+                                                          np.diff(amplitude[path])))])
+    step = min(c.step, c.max_step)
+    wanted = np.searchsorted(arclength, np.arange(0.0, arclength[-1], step))
+    chosen = sorted({*wanted.tolist(), len(path) - 1,
+                     *(int(np.flatnonzero(path == f)[0]) for f in folds if f in path)})
+    message = ""
+    if len(chosen) > c.max_points:
+        chosen = chosen[:c.max_points]
+        message = (f"branch ended at {c.max_points} points (max_points), forcing_frequency = "
+                   f"{omega[path[chosen[-1]]]:g} before stop = {c.stop:g}")
+    points = []
+    for j in chosen:
+        i = int(path[j])
+        period = 2 * np.pi / omega[i]
+        decay = np.exp(-p.damping_ratio * period)
+        passed = sum(f < i for f in folds)
+        if i in folds:
+            multipliers, stable = np.array([1.0, decay**2], complex), True
+        elif passed % 2:
+            lo, hi = folds[passed - 1], folds[passed]
+            grow = 1.0 + 0.5 * np.sin(np.pi * (i - lo) / (hi - lo))
+            multipliers, stable = np.array([grow, decay**2 / grow], complex), False
+        else:
+            multipliers = decay * np.exp(np.array([1j, -1j]) * period)
+            stable = True
+        result = duffing_response(p, float(omega[i]), float(amplitude[i]), float(phase[i]),
+                                  message)
+        points.append(BranchPoint(float(omega[i]), result, multipliers, stable, i in folds))
+    return points
+
+
+DUFFING_SPEC = ModelSpec(
+    name="pipeline-test-duffing",
+    parameters=DUFFING_PARAMETERS,
+    simulate=duffing_simulate,
+    description="Duffing oscillator, one-harmonic balance in closed form along its branch",
+    outputs=DUFFING_OUTPUTS,
+    branch=duffing_branch,
+)
+register(DUFFING_SPEC)
