@@ -446,8 +446,11 @@ def _locate_fold(problem: _Problem, y: Array, t: Array, h: float
         return float(ts[-1])
 
     try:
+        # without raising at maxiter: with a finite-difference Jacobian the tangent's
+        # λ-component is known to ~1e-6 only (measured on the hub's harmonic balance), and the
+        # last bracket's point is then the fold to that accuracy
         s = scipy.optimize.brentq(t_lam, 0.0, h, xtol=1e-14 * h, rtol=4 * np.finfo(float).eps,
-                                  maxiter=60)
+                                  maxiter=60, disp=False)
         if s not in cache:
             t_lam(s)
     except (ArithmeticError, ValueError, RuntimeError):

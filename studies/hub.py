@@ -673,6 +673,13 @@ def _check(p: Parameters) -> None:
     check(p)
 
 
+def _branch(p: Parameters, c: Any) -> list:
+    """:func:`studies.hub_branches.branch` (imported on use: it builds on this module)."""
+    from studies.hub_branches import branch
+    return branch(p, c)
+
+
 SPEC = ModelSpec("hub", PARAMETERS, simulate, _check,
                  description="four-bladed hub with four bifilars on a fuselage restraint",
-                 outputs=OUTPUTS, version="2", warm_up=(compile_bifilar, compile_kernels))
+                 outputs=OUTPUTS, version="2", warm_up=(compile_bifilar, compile_kernels),
+                 branch=_branch)

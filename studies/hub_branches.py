@@ -159,8 +159,7 @@ def balance_multipliers(sol: PeriodicSwing, harmonics: int = HILL_HARMONICS) -> 
     method on the linearization of all 2 + N coordinates, largest modulus first."""
     m = BALANCE_SAMPLES
     t = 2 * np.pi / sol.model.hub_speed * np.arange(m) / m
-    y = periodic_state(sol, t)
-    a = np.array([linearization(sol.model, ti, yi) for ti, yi in zip(t, y, strict=True)])
+    a = linearization(sol.model, t, periodic_state(sol, t))
     return hill_multipliers(a, sol.model.hub_speed, harmonics)
 
 

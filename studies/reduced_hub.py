@@ -335,9 +335,10 @@ def _solve(residual, x0: Array) -> Array:
 STATE_STEP = 1e-7  # central-difference step of the linearization (m, rad; m/s, rad/s)
 
 
-def accelerations(model: ReducedHub, t: float, y: Array) -> Array:
+def accelerations(model: ReducedHub, t: float | Array, y: Array) -> Array:
     """ẏ of the state y = (x, y, σ_0…σ_{N−1}, ẋ, ẏ, σ̇_0…σ̇_{N−1}) (m, rad, m/s, rad/s) at time
-    ``t`` (s): the module docstring's equations solved for the accelerations.
+    ``t`` (s): the module docstring's equations solved for the accelerations. ``y`` may hold
+    several states (shape (..., 2 (2 + N)), times ``t`` broadcast against its leading axes).
 
     The hub's equation with d²/dt²(e^{iψ}P) written out (P' = (m_b + m_p)Γ', the pins' centres
     moving at half the mass's rate) and the swing equations share the accelerations through
@@ -347,29 +348,34 @@ def accelerations(model: ReducedHub, t: float, y: Array) -> Array:
     g = model.holes.geometry
     n = len(model.azimuths)
     omega = model.hub_speed
-    sig, sig_d = y[2: 2 + n], y[4 + n:]
-    z, zd = y[0] + 1j * y[1], y[2 + n] + 1j * y[3 + n]
+    y = np.asarray(y, dtype=float)
+    t = np.asarray(t, dtype=float)[..., None]
+    sig, sig_d = y[..., 2: 2 + n], y[..., 4 + n:]
+    z, zd = y[..., :1] + 1j * y[..., 1:2], y[..., 2 + n: 3 + n] + 1j * y[..., 3 + n: 4 + n]
     psi = omega * t + model.azimuths
     terms = path_terms(model.holes, sig)
     gam, d1, d2 = terms
     rot = np.exp(1j * psi)
     mbp = g.tuning_mass + g.pin_mass
     moment = g.tuning_mass * gam + 2 * g.pin_mass * _pin_center(model.holes, gam)
-    force = np.sum(model.force * np.exp(1j * model.whirl * t))
-    hub_rhs = (force - model.damping * zd - model.stiffness * z
+    force = np.sum(model.force * np.exp(1j * model.whirl * t), axis=-1)
+    hub_rhs = (force - model.damping * zd[..., 0] - model.stiffness * z[..., 0]
                - np.sum(rot * (-omega**2 * moment + 2j * omega * mbp * d1 * sig_d
-                               + mbp * d2 * sig_d**2)))
+                               + mbp * d2 * sig_d**2), axis=-1))
     # the swing equations' terms other than the accelerations' (σ̈ = 0, z̈ = 0)
-    swing_rhs = -_swing_residual(model, terms, sig_d, np.zeros(n), np.zeros(n), psi)
+    zero = np.zeros_like(sig)
+    swing_rhs = -_swing_residual(model, terms, sig_d, zero, zero, psi)
     c_j = g.tuning_mass + 0.5 * g.pin_mass + 2 * g.pin_inertia / g.pin_diameter**2
     coupling = mbp * rot * d1
-    mass = np.zeros((2 + n, 2 + n))
-    mass[0, 0] = mass[1, 1] = model.hub_mass
-    mass[0, 2:] = mass[2:, 0] = coupling.real
-    mass[1, 2:] = mass[2:, 1] = coupling.imag
-    mass[2:, 2:] = np.diag(c_j * np.abs(d1) ** 2)
-    acc = np.linalg.solve(mass, np.concatenate([[hub_rhs.real, hub_rhs.imag], swing_rhs]))
-    return np.concatenate([y[2 + n:], acc])
+    mass = np.zeros((*sig.shape[:-1], 2 + n, 2 + n))
+    mass[..., 0, 0] = mass[..., 1, 1] = model.hub_mass
+    mass[..., 0, 2:] = mass[..., 2:, 0] = coupling.real
+    mass[..., 1, 2:] = mass[..., 2:, 1] = coupling.imag
+    idx = np.arange(2, 2 + n)
+    mass[..., idx, idx] = c_j * np.abs(d1) ** 2
+    rhs = np.concatenate([hub_rhs.real[..., None], hub_rhs.imag[..., None], swing_rhs], axis=-1)
+    acc = np.linalg.solve(mass, rhs[..., None])[..., 0]
+    return np.concatenate([y[..., 2 + n:], acc], axis=-1)
 
 
 def periodic_state(sol: PeriodicSwing, t: float | Array) -> Array:
@@ -384,9 +390,12 @@ def periodic_state(sol: PeriodicSwing, t: float | Array) -> Array:
     return y[0] if np.ndim(t) == 0 else y
 
 
-def linearization(model: ReducedHub, t: float, y: Array, step: float = STATE_STEP) -> Array:
-    """∂ẏ/∂y of :func:`accelerations` at (t, y), by central differences (``step``; the
-    truncation error ~ step² relative, the roundoff ~ 1e-16/step)."""
+def linearization(model: ReducedHub, t: float | Array, y: Array,
+                  step: float = STATE_STEP) -> Array:
+    """∂ẏ/∂y of :func:`accelerations` at (t, y) (shape (..., n, n) for states (..., n)), by
+    central differences (``step``; the truncation error ~ step² relative, the roundoff
+    ~ 1e-16/step)."""
+    y = np.asarray(y, dtype=float)
     cols = [(accelerations(model, t, y + step * e) - accelerations(model, t, y - step * e))
-            / (2 * step) for e in np.eye(len(y))]
-    return np.column_stack(cols)
+            / (2 * step) for e in np.eye(y.shape[-1])]
+    return np.stack(cols, axis=-1)
