@@ -106,6 +106,8 @@ FIXED_HARMONICS = (4, 8)
 ORBIT_POINTS = 720
 # Cases per time-history figure (one panel each for pin angles, one line each otherwise).
 CASES_PER_PAGE = 8
+# A branch archive's backbone (studies.backbones): free-vibration order per swing amplitude.
+BACKBONE = "backbone_order"
 # A harmonic whose amplitude stays below this share of the figure's largest is numerical noise
 # (roundoff of the Fourier analysis, about 1e-14 relative): its panel or bar group is left out.
 NOISE_LEVEL = 1e-6
@@ -756,7 +758,28 @@ def _branch_figures(ds: xr.Dataset, spec: ModelSpec, cases: Cases, out_dir: Path
               dict(multiplier.attrs))],
         parameter, cases, f"Stability {along}", f"floquet_multiplier_max_vs_{parameter}",
         out_dir, formats, level=1.0)
+    if BACKBONE in ds:
+        paths += _backbones(ds, cases, out_dir, formats)
     return paths
+
+
+def _backbones(ds: xr.Dataset, cases: Cases, out_dir: Path,
+               formats: Sequence[str]) -> list[Path]:
+    """The absorbers' backbones of a branch archive: free-vibration order against swing
+    amplitude, one curve per ok case (its hole shape in the legend)."""
+    var = ds[BACKBONE]
+    (dim,) = [d for d in var.dims if d not in _case_dims(ds)]
+    fig = Figure(figsize=(8.0, 5.2), layout="constrained")
+    ax = fig.subplots()
+    for case in (c for c in cases if c.ok):
+        ax.plot(ds[dim].values, var.isel(case.sel).values, color=case.style["color"],
+                label=case.label)
+    ax.set_xlabel(_axis_label(dict(ds[dim].attrs), dim))
+    ax.set_ylabel(_axis_label(dict(var.attrs), BACKBONE))
+    ax.set_title(var.attrs.get("long_name", BACKBONE), fontsize="medium", wrap=True)
+    ax.grid(True, alpha=0.3)
+    _legend(fig, ax)
+    return _save(fig, out_dir, "backbones", formats)
 
 
 def archive_model(ds: xr.Dataset, path: str | os.PathLike[str] = "archive") -> ModelSpec:

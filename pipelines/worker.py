@@ -38,7 +38,7 @@ from pipelines.archive import (
     write_case,
 )
 from pipelines.studyfile import model_version
-from studies.branches import Continuation
+from studies.branches import BranchResult, Continuation
 from studies.parameters import ModelSpec
 from studies.progress import reporting
 from studies.registry import resolve_model
@@ -188,7 +188,9 @@ def run_branch(spec: ModelSpec, params: Mapping[str, Any],
         an archived output of a point came out NaN.
     """
     settings = Continuation(**continuation)
-    points = spec.branch(spec.trusted(params), settings)
+    found = spec.branch(spec.trusted(params), settings)
+    extras = found.extras if isinstance(found, BranchResult) else xr.Dataset()
+    points = found.points if isinstance(found, BranchResult) else found
     if not points:
         raise ModelFailure(f"the branch in {settings.parameter} from {settings.start:g} has "
                            "no points")
@@ -202,7 +204,7 @@ def run_branch(spec: ModelSpec, params: Mapping[str, Any],
         if note and note not in notes:
             notes.append(note)
     summary = branch_summary(points, spec, settings.parameter, summaries=summaries)
-    return summary, "; ".join(notes)
+    return summary.merge(extras), "; ".join(notes)
 
 
 def _urgent(listener: Any, line: str) -> None:

@@ -5,13 +5,14 @@ parameter from ``start`` to ``stop`` by pseudo-arclength continuation (so that i
 folds), each point with its Floquet multipliers. A model that can do this gives its
 :class:`~studies.parameters.ModelSpec` a ``branch`` function::
 
-    branch(p: Parameters, c: Continuation) -> list[BranchPoint]
+    branch(p: Parameters, c: Continuation) -> list[BranchPoint] | BranchResult
 
 ``p`` holds the case's parameters (the continued one at ``c.start``); each
 :class:`BranchPoint` carries what the model's ``simulate`` would return for that periodic
 response (the same declared outputs, so that the archive keeps the same harmonics per point),
 its multipliers, whether it is stable and whether it is a fold (a turning point in the
-parameter).
+parameter). A :class:`BranchResult` adds results of the case as a whole (e.g. the
+absorber's backbone), archived with the points.
 """
 
 from __future__ import annotations
@@ -153,3 +154,21 @@ class BranchPoint:
     def multiplier_max(self) -> float:
         """The largest modulus of :attr:`multipliers`."""
         return float(np.max(np.abs(self.multipliers))) if len(self.multipliers) else np.nan
+
+
+@dataclass(frozen=True)
+class BranchResult:
+    """A branch with results of the case as a whole.
+
+    Attributes
+    ----------
+    points
+        The branch (:class:`BranchPoint`).
+    extras
+        Variables along dimensions of their own (not ``point``), each with ``units`` and
+        ``long_name``, the same coordinates in every case of a study (e.g. the backbone's
+        ``backbone_amplitude``).
+    """
+
+    points: list[BranchPoint]
+    extras: xr.Dataset

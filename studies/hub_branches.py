@@ -7,10 +7,13 @@ that it turns around the folds of a softening or hardening absorber, by either o
 ``harmonic_balance`` (free bifilars)
     The exact equations on swing coordinates (:mod:`studies.reduced_hub`) solved for σ_0's
     harmonics 0…24 on 128 samples a revolution (their residual ~1e-10 of the swing's
-    accelerations, where the start's 12 on 64 leave 6e-5). Stability by Hill's method
-    (:func:`solver.floquet.hill_multipliers`) on the linearization of all 2 + N coordinates
-    (:func:`studies.reduced_hub.linearization`): the perturbations need not share the
-    response's sector symmetry.
+    accelerations, where the start's 12 on 64 leave 6e-5). Stability from the linearization
+    of all 2 + N coordinates (:func:`studies.reduced_hub.linearization`: the perturbations
+    need not share the response's sector symmetry), integrated over a sector
+    (:func:`studies.reduced_hub.floquet_multipliers`). Hill's method
+    (:func:`solver.floquet.hill_multipliers`) on the same linearization gives the same
+    largest multiplier (to 1e-9; 4e-6 at a fold, tests), but its 300 × 300 eigenproblem
+    takes 0.15–7 s a point where the sector's integration takes 0.03 s.
 ``shooting`` (any ``bifilar``)
     The multibody model itself, on the quarter-revolution map in minimal coordinates: the
     hub centre's position and velocity and each bifilar's pin angle and rate (12 numbers) give
@@ -36,28 +39,30 @@ import xarray as xr
 
 from solver.composition import Composed
 from solver.continuation import continue_branch
-from solver.floquet import hill_multipliers, multipliers
+from solver.floquet import multipliers
 from solver.integrators import make_integrator
 from solver.system import System
 from studies import hub
 from studies.absorbers import N_BIFILARS, AbsorberProbe, AbsorberStart
+from studies.backbones import backbone
 from studies.bifilar import pin_angle
-from studies.branches import BranchPoint, Continuation
+from studies.branches import BranchPoint, BranchResult, Continuation
 from studies.holes import MAX_TANGENT_ANGLE
 from studies.parameters import ParameterError, Parameters
 from studies.reduced_hub import (
     HarmonicBalance,
     PeriodicSwing,
-    linearization,
-    periodic_state,
+    floquet_multipliers,
     tangent_angle,
 )
 
 Z = np.array([0.0, 0.0, 1.0])
 BALANCE_HARMONICS = 24  # σ_0's harmonics on a branch (module docstring)
 BALANCE_SAMPLES = 128
-HILL_HARMONICS = 16  # harmonics of Hill's matrix (its multipliers vs the monodromy's: tests)
+SWING_SCALE = np.radians(20.0)  # rad: the swing's scale in the arclength (balance_branch)
 OUTPUT_SAMPLES = 64  # samples of the revolution a harmonic-balance point archives
+# the backbone's swing amplitudes (degree): the holes cover the path to 70°
+BACKBONE_AMPLITUDES = np.arange(2.0, 70.1, 2.0)
 # a multiplier this far outside the unit circle, or closer, counts as on it (stable): the
 # accuracy Hill's method and the shooting Jacobian give the multipliers to (tests)
 STABILITY_MARGIN = 1e-6
@@ -65,10 +70,10 @@ SHOOTING_STEP = 1e-6  # finite-difference step of the shooting map (m·Ω⁻¹�
 SHOOTING_TOLERANCE = 1e-9  # the map's residual over the unknowns' scales at a solution
 
 
-def branch(p: Parameters, c: Continuation) -> list[BranchPoint]:
+def branch(p: Parameters, c: Continuation) -> BranchResult:
     """The hub's branch of periodic responses from ``p`` (the continued parameter at
     ``c.start``) as ``c`` says: harmonic balance for free bifilars (``method = "auto"``),
-    shooting otherwise.
+    shooting otherwise; with free bifilars also their backbone (:func:`backbone_dataset`).
 
     Raises
     ------
@@ -84,11 +89,26 @@ def branch(p: Parameters, c: Continuation) -> list[BranchPoint]:
         if p.bifilar != "free":
             raise ParameterError(f"method = 'harmonic_balance' needs bifilar = 'free' (its "
                                  f"swing coordinates); got {p.bifilar!r}: use 'shooting'")
-        return balance_branch(p, c)
+        return BranchResult(balance_branch(p, c), backbone_dataset(p))
     if p.bifilar == "equivalent":
         raise ParameterError("bifilar = 'equivalent' has no branches: its response is linear "
                              "(studies.equivalent gives it in closed form)")
-    return shooting_branch(p, c)
+    extras = backbone_dataset(p) if p.bifilar == "free" else xr.Dataset()
+    return BranchResult(shooting_branch(p, c), extras)
+
+
+def backbone_dataset(p: Parameters) -> xr.Dataset:
+    """The case's backbone (:func:`studies.backbones.backbone`) at
+    :data:`BACKBONE_AMPLITUDES`: ``backbone_order`` along ``backbone_amplitude``."""
+    order = backbone(hub.design(p).holes, p.hub_speed, np.radians(BACKBONE_AMPLITUDES))
+    return xr.Dataset(
+        {"backbone_order": ("backbone_amplitude", order,
+                            {"units": "1", "long_name": "free-vibration tuning order of the "
+                             "bifilar (unforced, undamped, hub centre fixed) against its "
+                             "swing amplitude"})},
+        coords={"backbone_amplitude": ("backbone_amplitude", BACKBONE_AMPLITUDES,
+                                       {"units": "degree",
+                                        "long_name": "largest pin angle of the free swing"})})
 
 
 def _varied(p: Parameters, name: str) -> Callable[[float], Parameters | None]:
@@ -133,8 +153,12 @@ def balance_branch(p: Parameters, c: Continuation) -> list[BranchPoint]:
     b0 = balance(c.start)
     x0 = b0.unknowns(guess.sigma(b0.t))
     t0 = time.perf_counter()
+    # arclength: a change of the swing's harmonics by SWING_SCALE counts as much as crossing
+    # the parameter's range (at the small-swing start the default, its harmonics' size, would
+    # make the large swing's steps tiny)
     found = continue_branch(residual, x0, c.start, c.stop, step=c.step, min_step=c.min_step,
-                            max_step=c.max_step, max_points=c.max_points)
+                            max_step=c.max_step, max_points=c.max_points,
+                            x_scale=max(float(np.abs(x0).max()), SWING_SCALE))
     points = []
     note = "" if found.complete else f"branch ended early: {found.reason}"
     for pt in found.points:
@@ -144,7 +168,7 @@ def balance_branch(p: Parameters, c: Continuation) -> list[BranchPoint]:
             note = (f"branch ended at {c.parameter} = {pt.parameter:g}: the swing turns the "
                     f"path beyond the holes' {np.degrees(MAX_TANGENT_ANGLE):g}°")
             break
-        mult = balance_multipliers(sol)
+        mult = floquet_multipliers(sol)
         d = hub.design(q)
         facts = _facts(q, d, iterations=pt.iterations, change=sol.residual,
                        seconds=time.perf_counter() - t0, samples=OUTPUT_SAMPLES)
@@ -152,15 +176,6 @@ def balance_branch(p: Parameters, c: Continuation) -> list[BranchPoint]:
         result = _point_result(q.hub_speed, hub.solution_rows(q, d, sol, t), facts, note)
         points.append(BranchPoint(pt.parameter, result, mult, _stable(mult), pt.fold))
     return points
-
-
-def balance_multipliers(sol: PeriodicSwing, harmonics: int = HILL_HARMONICS) -> np.ndarray:
-    """The revolution's Floquet multipliers of the periodic response ``sol`` by Hill's
-    method on the linearization of all 2 + N coordinates, largest modulus first."""
-    m = BALANCE_SAMPLES
-    t = 2 * np.pi / sol.model.hub_speed * np.arange(m) / m
-    a = linearization(sol.model, t, periodic_state(sol, t))
-    return hill_multipliers(a, sol.model.hub_speed, harmonics)
 
 
 def _stable(mult: np.ndarray) -> bool:
