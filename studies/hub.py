@@ -133,6 +133,10 @@ PARAMETERS: dict[str, Param] = {
                            "whirl and the bifilars' swing from their fixed-frame equivalent) "
                            "or rest (hub centred, bifilars at rest at their vertex)",
                            choices=("linear", "nonlinear", "rest")),
+    "start_swing": Param(0.0, "degree", "largest pin angle of the guess from which the "
+                         "nonlinear start's harmonic balance is solved (0: the linear "
+                         "response's): where a softening absorber has two stable responses, "
+                         "a guess near either reaches that one", minimum=0.0, maximum=70.0),
     "steps_per_rev": Param(40, "1", "time steps per revolution (each of them `composition`'s "
                            "substeps)", minimum=20, maximum=20000),
     "composition": Param("suzuki", "1", "symmetric composition of the ep step into a "
@@ -317,16 +321,36 @@ def reduced_model(p: Parameters, d: HubDesign) -> ReducedHub:
 def reduced_response(p: Parameters, d: HubDesign, **kw) -> PeriodicSwing:
     """The periodic response of :func:`reduced_model` by harmonic balance
     (:func:`studies.reduced_hub.periodic_swing`, options ``kw``), from :func:`linear_response`
-    (σ ≈ φ/φ'(0): the linear response knows only the vertex). Raises RuntimeError if the
-    balance does not converge."""
+    (σ ≈ φ/φ'(0): the linear response knows only the vertex).
+
+    With ``start_swing`` set, the linear response scaled to that largest pin angle and the
+    same in opposite phase are both tried (a softening absorber's large response lags the
+    small one by about half a period), and the solution whose swing is nearest is returned.
+    Raises RuntimeError if the balance does not converge.
+    """
     omega = p.hub_speed
     m = kw.get("samples", SAMPLES)
     t = 2 * np.pi / omega * np.arange(m) / m
     whirl, _, aa = linear_response(p, d)
     phi0 = np.real((aa[:, None] * np.exp(1j * np.outer(whirl, t))).sum(axis=0)
                    * np.exp(-1j * (omega * t + AZIMUTHS[0])))
-    return periodic_swing(reduced_model(p, d),
-                          phi0 / tangent_angle(d.holes, np.zeros(1))[1][0], **kw)
+    model = reduced_model(p, d)
+    slope = tangent_angle(d.holes, np.zeros(1))[1][0]
+    if not (p.start_swing > 0 and np.abs(phi0).max() > 0):
+        return periodic_swing(model, phi0 / slope, **kw)
+    target = np.radians(p.start_swing)
+    found, failures = [], []
+    for sign in (1.0, -1.0):
+        try:
+            sol = periodic_swing(model, sign * phi0 * target / np.abs(phi0).max() / slope, **kw)
+        except RuntimeError as exc:
+            failures.append(str(exc))
+            continue
+        swing = np.abs(tangent_angle(d.holes, sol.sigma(t))[0]).max()
+        found.append((abs(swing - target), sol))
+    if not found:
+        raise RuntimeError(f"from start_swing = {p.start_swing:g}°: {failures[0]}")
+    return min(found, key=lambda f: f[0])[1]
 
 
 def reduced_samples(p: Parameters, d: HubDesign, t: np.ndarray, **kw) -> np.ndarray:

@@ -66,8 +66,13 @@ BACKBONE_AMPLITUDES = np.arange(2.0, 70.1, 2.0)
 # a multiplier this far outside the unit circle, or closer, counts as on it (stable): the
 # accuracy Hill's method and the shooting Jacobian give the multipliers to (tests)
 STABILITY_MARGIN = 1e-6
-SHOOTING_STEP = 1e-6  # finite-difference step of the shooting map (m·Ω⁻¹… scaled, see _scales)
-SHOOTING_TOLERANCE = 1e-9  # the map's residual over the unknowns' scales at a solution
+# The shooting map's Newton matrix by forward differences of this step in the scaled
+# coordinates (1e-5 of 1° of swing): its truncation error, ~1e-5 relative, is also the
+# multipliers' accuracy; the map itself is evaluated with the time step's Newton solved to
+# MAP_NEWTON_TOL, so that its roundoff (~1e-12) stays far below the differences.
+SHOOTING_STEP = 1e-5
+MAP_NEWTON_TOL = 1e-12
+SHOOTING_TOLERANCE = 1e-7  # the corrector's last update over the unknowns' scales
 
 
 def branch(p: Parameters, c: Continuation) -> BranchResult:
@@ -241,7 +246,7 @@ class QuarterMap:
         model, hub_body, shaft, parts = hub.build(p, self.d, self.start(y))
         sysm = System(model)
         integ = make_integrator(sysm, "ep", 2 * np.pi / p.hub_speed / p.steps_per_rev,
-                                tol=hub.NEWTON_TOL)
+                                tol=MAP_NEWTON_TOL)
         if p.composition != "none":
             integ = Composed(integ, p.composition)
         return integ, sysm, hub_body, shaft, parts
@@ -323,9 +328,18 @@ def shooting_branch(p: Parameters, c: Continuation) -> list[BranchPoint]:
     y0 = np.concatenate([start.center[:2], start.velocity[:2], start.angles, start.rates])
     u0 = y0[live] / scale[live]
     t0 = time.perf_counter()
-    found = continue_branch(residual, u0, c.start, c.stop, step=c.step, min_step=c.min_step,
-                            max_step=c.max_step, max_points=c.max_points,
-                            tolerance=SHOOTING_TOLERANCE)
+    def jacobian(u: np.ndarray, value: float) -> tuple[np.ndarray, np.ndarray]:
+        # forward differences: 1 + n + 1 quarter revolutions
+        f0 = residual(u, value)
+        jx = np.column_stack([(residual(u + SHOOTING_STEP * e, value) - f0) / SHOOTING_STEP
+                              for e in np.eye(len(u))])
+        dl = SHOOTING_STEP * max(abs(value), abs(c.stop - c.start))
+        return jx, (residual(u, value + dl) - f0) / dl
+
+    found = continue_branch(residual, u0, c.start, c.stop, jacobian=jacobian, step=c.step,
+                            min_step=c.min_step, max_step=c.max_step,
+                            max_points=c.max_points, tolerance=SHOOTING_TOLERANCE,
+                            x_scale=np.ones(len(u0)))
     note = "" if found.complete else f"branch ended early: {found.reason}"
     points = []
     for pt in found.points:
