@@ -63,7 +63,11 @@ BUILT_IN_STUDIES = {"rotor": "rotor_study.toml", "hub": "hub_study.toml"}
 STUDIES: dict[str, dict[str, str]] = {
     "table1": BUILT_IN_STUDIES,
     "envelope": {"rotor": "envelope_study.toml"},
+    "jump": {"hub": "jump_study.toml"},
 }
+# Why a built-in study runs on one model only (the error's reason).
+ONE_MODEL_ONLY = {"envelope": "the hub model has no trim",
+                  "jump": "its branches follow the hub's exact swing equations"}
 EXIT_INTERRUPTED = 130
 
 # Errors whose message tells the user what to fix; anything else is a bug and keeps its traceback.
@@ -71,17 +75,19 @@ USER_ERRORS = (StudyError, ParameterError, ArchiveError, SweepError, FileNotFoun
                InputError)
 
 
-def default_study(model: str = "rotor", study: str = "table1") -> Traversable:
+def default_study(model: str | None = None, study: str = "table1") -> Traversable:
     """A built-in study file.
 
     Parameters
     ----------
     model
-        ``rotor`` (default) or ``hub``.
+        ``rotor`` or ``hub``; by default the rotor, or the study's only model.
     study
         ``table1`` (default): the paper's Table 1 cases 0–3 and the linear equivalent of case 1;
         ``envelope``: the rotor with propulsive trim over airspeed and rotor speed
-        (``studies/envelope_study.toml``, rotor only).
+        (``studies/envelope_study.toml``, rotor only); ``jump``: the hub's free bifilars
+        continued in the 3P excitation, circle, cycloid and epicycloid holes
+        (``studies/jump_study.toml``, hub only).
 
     Returns
     -------
@@ -96,10 +102,12 @@ def default_study(model: str = "rotor", study: str = "table1") -> Traversable:
     if study not in STUDIES:
         raise InputError(f"--study {study}: unknown; valid: {', '.join(STUDIES)}")
     files = STUDIES[study]
+    if model is None:
+        model = "rotor" if "rotor" in files else next(iter(files))
     if model not in files:
         raise InputError(
             f"--study {study} --model {model}: the {study} study runs on the "
-            f"{' or '.join(sorted(files))} model only (the hub model has no trim); "
+            f"{' or '.join(sorted(files))} model only ({ONE_MODEL_ONLY.get(study, '')}); "
             f"drop --model {model} or use --study table1")
     return resources.files("studies") / files[model]
 
@@ -305,8 +313,8 @@ def plot(archive: Path, out_dir: Path, formats: tuple[str, ...]) -> None:
 @click.option("--out", "out_dir", default=Path("results"), show_default=True,
               type=OutPath(file_okay=False, path_type=Path),
               help="Output directory: cases/, archive.nc and plots/.")
-@click.option("--model", "model", default="rotor", show_default=True,
-              type=click.Choice(sorted(BUILT_IN_STUDIES)),
+@click.option("--model", "model", default=None, show_default="rotor, or the study's only "
+              "model", type=click.Choice(sorted(BUILT_IN_STUDIES)),
               help="rotor: the paper's UH-60 rotor with elastic blades and aerodynamics; "
                    "hub: a rigid hub with assumed 3P/5P blade shears (faster). The README "
                    "gives the times.")
@@ -315,13 +323,17 @@ def plot(archive: Path, out_dir: Path, formats: tuple[str, ...]) -> None:
               help="table1: the paper's Table 1 cases 0-3 and the linear equivalent of case 1; "
                    "envelope: the rotor with propulsive trim at 40-160 kt and at 95-105 % "
                    "rotor speed, bifilars locked, free and equivalent (rotor model only; "
-                   "studies/envelope_study.toml, 33 cases).")
+                   "studies/envelope_study.toml, 33 cases); jump: the hub's free bifilars "
+                   "continued in the 3P excitation with their stability and backbones, "
+                   "circle, cycloid and epicycloid holes (hub model only; "
+                   "studies/jump_study.toml).")
 @workers_option
 @scheduler_option
 @cluster_option
 @worker_timeout_option
 @click.pass_context
-def run(ctx: click.Context, out_dir: Path, model: str, study_name: str, workers: int | None,
+def run(ctx: click.Context, out_dir: Path, model: str | None, study_name: str,
+        workers: int | None,
         scheduler: str | None, cluster: str | None, worker_timeout: float | None) -> None:
     """Run a built-in study and plot it into DIR/plots: the paper's Table 1 (cases 0-3, and
     the linear equivalent of case 1) on the rotor (default) or the hub model, or with
@@ -334,7 +346,7 @@ def run(ctx: click.Context, out_dir: Path, model: str, study_name: str, workers:
     _check_cluster(workers, scheduler, cluster)
     with _user_errors():
         study_file = default_study(model, study_name)
-    command = _command_line(ctx, "--out", str(out_dir), "--model", model,
+    command = _command_line(ctx, "--out", str(out_dir), *(("--model", model) if model else ()),
                             "--study", study_name, *_cluster_args(workers, scheduler, cluster))
     with _user_errors():
         check_output_dir(out_dir)

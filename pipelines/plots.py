@@ -775,7 +775,7 @@ def _backbones(ds: xr.Dataset, cases: Cases, out_dir: Path,
         ax.plot(ds[dim].values, var.isel(case.sel).values, color=case.style["color"],
                 label=case.label)
     ax.set_xlabel(_axis_label(dict(ds[dim].attrs), dim))
-    ax.set_ylabel(_axis_label(dict(var.attrs), BACKBONE))
+    ax.set_ylabel(f"tuning order ({_units_label(var.attrs.get('units', '1'))})")
     ax.set_title(var.attrs.get("long_name", BACKBONE), fontsize="medium", wrap=True)
     ax.grid(True, alpha=0.3)
     _legend(fig, ax)

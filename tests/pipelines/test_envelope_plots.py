@@ -172,6 +172,11 @@ def test_run_study_option(monkeypatch, tmp_path):
                                                    "--out", str(tmp_path)]))
     assert "--study" in line and "table1" in line and "envelope" in line
     assert not (tmp_path / "archive.nc").exists()
+    # the jump study is the hub's only: without --model it runs there
+    assert cli.default_study(None, "jump").name == "jump_study.toml"
+    line = one_error_line(runner.invoke(cli.main, ["run", "--study", "jump", "--model",
+                                                   "rotor", "--out", str(tmp_path)]))
+    assert "--study jump" in line and "hub" in line
 
 
 
