@@ -592,7 +592,10 @@ def _continuation(src: str, spec: ModelSpec, table: Any,
     if settings.parameter in fixed:
         raise StudyError(f"{where}: parameter = {settings.parameter!r} is also in [fixed]; the "
                          "continued parameter runs from start to stop, remove it from [fixed]")
-    clash = sorted(set(BRANCH_VARIABLES) & (set(spec.parameters) | set(spec.outputs)))
+    # a model's own floquet_multiplier_max (of its single runs) means the branch's: the
+    # branch's value is archived
+    clash = sorted((set(BRANCH_VARIABLES) & set(spec.parameters))
+                   | ((set(BRANCH_VARIABLES) - {"floquet_multiplier_max"}) & set(spec.outputs)))
     if clash:
         raise StudyError(f"{where}: model {spec.name!r} has parameter(s) or output(s) "
                          f"{', '.join(clash)} whose names a branch archive uses for its own "

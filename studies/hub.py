@@ -137,6 +137,9 @@ PARAMETERS: dict[str, Param] = {
                          "nonlinear start's harmonic balance is solved (0: the linear "
                          "response's): where a softening absorber has two stable responses, "
                          "a guess near either reaches that one", minimum=0.0, maximum=70.0),
+    "floquet": Param(True, "1", "compute the periodic response's Floquet multipliers "
+                     "(floquet_multiplier_max; 13 quarter revolutions of the multibody model "
+                     "at the recorded step; not for the equivalent)"),
     "steps_per_rev": Param(40, "1", "time steps per revolution (each of them `composition`'s "
                            "substeps)", minimum=20, maximum=20000),
     "composition": Param("suzuki", "1", "symmetric composition of the ep step into a "
@@ -185,6 +188,10 @@ OUTPUTS: dict[str, Output] = {
     "run_estimate_samples_per_rev": Output("1", "steps per revolution of the step-error "
                                            "estimate's coarser step (0: no estimate)", dims=()),
     "run_substeps": Output("1", "substeps of the composed time steps taken", dims=()),
+    "floquet_multiplier_max": Output(
+        "1", "largest modulus of the periodic response's Floquet multipliers over one "
+        "revolution (above 1: unstable), from the multibody quarter-revolution map's Jacobian "
+        "in minimal coordinates (studies.hub_branches)", dims=(), optional=True),
 }
 
 
@@ -557,6 +564,15 @@ def simulate(p: Parameters) -> xr.Dataset:
     data = rec.samples
     runs = [(integ, nrev)]
     notes = [note for note in (start_note, rec.note) if note]
+    floquet = {}
+    if p.floquet and p.bifilar != "equivalent":
+        from studies.hub_branches import run_multipliers  # (it builds on this module)
+        try:
+            mult = run_multipliers(p, integ, sysm, hub, shaft, parts)
+        except RuntimeError as exc:
+            notes.append(f"no Floquet multipliers: {exc}")
+        else:
+            floquet["floquet_multiplier_max"] = np.float64(np.abs(mult[0]))
     step_error = float("nan")
     n_c = periodic.coarser_steps(nrev, n_sec, N_MAX)
     extrapolated = False
@@ -614,6 +630,7 @@ def simulate(p: Parameters) -> xr.Dataset:
     }
     if np.isfinite(step_error):
         facts["run_step_error_estimate"] = np.float64(step_error)
+    facts.update(floquet)
     ds = SPEC.dataset({**series, **facts}, {"message": "; ".join(notes)})
     return ds
 
@@ -705,5 +722,5 @@ def _branch(p: Parameters, c: Any) -> list:
 
 SPEC = ModelSpec("hub", PARAMETERS, simulate, _check,
                  description="four-bladed hub with four bifilars on a fuselage restraint",
-                 outputs=OUTPUTS, version="2", warm_up=(compile_bifilar, compile_kernels),
+                 outputs=OUTPUTS, version="3", warm_up=(compile_bifilar, compile_kernels),
                  branch=_branch)

@@ -290,6 +290,40 @@ def _scales(p: Parameters) -> np.ndarray:
     return s
 
 
+def quarter_map_jacobian(qm: QuarterMap, y: np.ndarray, scale: np.ndarray,
+                         live: np.ndarray) -> np.ndarray:
+    """∂(map − identity)/∂u of the quarter-revolution map at y in the scaled coordinates
+    u = y/scale (``live`` ones only), by forward differences of :data:`SHOOTING_STEP`."""
+    def residual(u: np.ndarray) -> np.ndarray:
+        z = y.copy()
+        z[live] = u * scale[live]
+        return (qm(z) - z)[live] / scale[live]
+    u0 = y[live] / scale[live]
+    f0 = residual(u0)
+    return np.column_stack([(residual(u0 + SHOOTING_STEP * e) - f0) / SHOOTING_STEP
+                            for e in np.eye(len(u0))])
+
+
+def run_multipliers(p: Parameters, integ, sysm: System, hub_body, shaft, parts
+                    ) -> np.ndarray:
+    """The revolution's Floquet multipliers of a run's periodic response from its integrator
+    at the end of the recording (a whole number of quarter revolutions): the quarter map's
+    Jacobian (:class:`QuarterMap`) at the state read there, bifilars renumbered to the
+    start's places. Largest modulus first."""
+    qm = QuarterMap(p)
+    y = qm.read(sysm, hub_body, shaft, parts, integ.q, integ.v)
+    sectors = round(integ.t * p.hub_speed * N_BIFILARS / (2 * np.pi))
+    n = N_BIFILARS
+    # at t = jT/N bifilar k sits where bifilar k + j started
+    y[4: 4 + n] = np.roll(y[4: 4 + n], sectors)
+    y[4 + n:] = np.roll(y[4 + n:], sectors)
+    scale = _scales(p)
+    live = np.ones(len(scale), dtype=bool) if p.bifilar == "free" else np.arange(len(scale)) < 4
+    jac = quarter_map_jacobian(qm, y, scale, live)
+    mult = multipliers(jac + np.eye(len(jac))) ** N_BIFILARS
+    return mult[np.argsort(-np.abs(mult))]
+
+
 def shooting_branch(p: Parameters, c: Continuation) -> list[BranchPoint]:
     """The branch by shooting on the multibody model's quarter-revolution map (module
     docstring)."""
