@@ -191,8 +191,8 @@ def _facts(p: Parameters, d: hub.HubDesign, *, iterations: int, change: float,
            seconds: float, samples: int, revolutions: float = 0.0, steps: int = 0
            ) -> dict[str, np.generic]:
     """The hub's declared run facts for a branch point: one revolution recorded at
-    ``samples`` a revolution, ``revolutions`` simulated (0 for the harmonic balance),
-    ``change`` the solution's residual."""
+    ``samples`` a revolution; ``revolutions`` and ``steps`` those the branch had simulated
+    up to this point (0 for the harmonic balance); ``change`` the solution's residual."""
     return {
         "run_hub_speed": np.float64(p.hub_speed),
         "run_revolutions": np.int32(1),
@@ -226,13 +226,13 @@ def _point_result(omega: float, rows: np.ndarray, facts: dict[str, np.generic],
 class QuarterMap:
     """The multibody hub's quarter-revolution map in minimal coordinates (module docstring):
     y = (x, y, ẋ, ẏ of the hub centre (m, m/s), the pin angles φ_k, their rates φ̇_k (rad,
-    rad/s)) at t = 0 → the same a quarter revolution later, bifilars renumbered."""
+    rad/s)) at t = 0 → the same a quarter revolution later, bifilars renumbered. ``spent``
+    (shared by the maps of one branch) counts the revolutions and time steps simulated."""
 
-    def __init__(self, p: Parameters) -> None:
+    def __init__(self, p: Parameters, spent: dict[str, float] | None = None) -> None:
         self.p, self.d = p, hub.design(p)
         self.steps = p.steps_per_rev // N_BIFILARS
-        self.revolutions = 0.0
-        self.step_count = 0
+        self.spent = {"revolutions": 0.0, "steps": 0} if spent is None else spent
 
     def start(self, y: np.ndarray) -> AbsorberStart:
         n = N_BIFILARS
@@ -269,8 +269,8 @@ class QuarterMap:
             info = integ.step()
             if not info.converged:
                 raise RuntimeError(f"time step failed at t = {integ.t:.6g} s: {info.message}")
-        self.revolutions += 1 / N_BIFILARS
-        self.step_count += self.steps
+        self.spent["revolutions"] += 1 / N_BIFILARS
+        self.spent["steps"] += self.steps
         out = self.read(sysm, hub_body, shaft, parts, integ.q, integ.v)
         n = N_BIFILARS
         # bifilar k's place a quarter revolution on is bifilar k + 1's at t = 0
@@ -335,13 +335,14 @@ def shooting_branch(p: Parameters, c: Continuation) -> list[BranchPoint]:
     free = p.bifilar == "free"
     live = np.ones(len(scale), dtype=bool) if free else np.arange(len(scale)) < 4
     maps: dict[float, QuarterMap | None] = {}
+    spent = {"revolutions": 0.0, "steps": 0}  # by every map of the branch
 
     def quarter(value: float) -> QuarterMap | None:
         if value not in maps:
             if len(maps) > 4:
                 maps.clear()
             q = at(value)
-            maps[value] = None if q is None else QuarterMap(q)
+            maps[value] = None if q is None else QuarterMap(q, spent)
         return maps[value]
 
     def full(u: np.ndarray) -> np.ndarray:
@@ -381,12 +382,12 @@ def shooting_branch(p: Parameters, c: Continuation) -> list[BranchPoint]:
         # the quarter-revolution monodromy in the scaled coordinates: J_x = M_s − I
         mult = multipliers(pt.jacobian + np.eye(len(pt.x))) ** N_BIFILARS
         mult = mult[np.argsort(-np.abs(mult))]
-        qm = quarter(pt.parameter) or QuarterMap(q)
+        qm = quarter(pt.parameter) or QuarterMap(q, spent)
         rows = _record(qm, full(pt.x))
         facts = _facts(q, qm.d, iterations=pt.iterations,
                        change=float(np.max(np.abs(residual(pt.x, pt.parameter)))),
                        seconds=time.perf_counter() - t0, samples=q.steps_per_rev,
-                       revolutions=qm.revolutions, steps=qm.step_count)
+                       revolutions=spent["revolutions"], steps=int(spent["steps"]))
         points.append(BranchPoint(pt.parameter, _point_result(q.hub_speed, rows, facts, note),
                                   mult, _stable(mult), pt.fold))
     return points
@@ -401,6 +402,6 @@ def _record(qm: QuarterMap, y: np.ndarray) -> np.ndarray:
     for _ in range(qm.p.steps_per_rev):
         integ.step()
         rows.append(sample())
-    qm.revolutions += 1
-    qm.step_count += qm.p.steps_per_rev
+    qm.spent["revolutions"] += 1
+    qm.spent["steps"] += qm.p.steps_per_rev
     return np.array(rows)

@@ -302,3 +302,29 @@ def test_unstable_parts_are_dashed_and_folds_marked(branches, monkeypatch, tmp_p
     assert any(list(line.get_ydata()) == [1.0, 1.0] for line in floquet.get_lines())
     legend = [t.get_text() for t in drawn[f"results_vs_{PARAMETER}"].legends[0].get_texts()]
     assert legend == ["hardening", "linear", "stable", "unstable", "fold"]
+
+
+@pytest.mark.slow
+def test_the_jump_study(tmp_path):
+    """`bifilar run --study jump`: the circle's branch folds twice, the cycloid's and the
+    epicycloid's not; each case archives its backbone; the figures are drawn."""
+    from click.testing import CliRunner
+
+    from pipelines import cli
+    from pipelines.archive import open_archive
+
+    result = CliRunner().invoke(cli.main, ["run", "--study", "jump", "--out", str(tmp_path),
+                                           "--workers", "2"])
+    assert result.exit_code == 0, result.output
+    ds = open_archive(tmp_path / "archive.nc")
+    names = [str(n) for n in ds["case_name"].values] if "case_name" in ds else None
+    folds = ds["fold"].fillna(0).sum("point").values
+    assert list(folds) == [2, 0, 0], (names, folds)
+    order = ds["backbone_order"]
+    assert order.dims[-1] == "backbone_amplitude"
+    # softening circle, hardening cycloid, isochronous epicycloid (2.95P tuning)
+    last = order.isel(backbone_amplitude=-1).values
+    assert last[0] < 2.7 and last[1] > 2.97 and abs(last[2] - 2.95) < 1e-3
+    stems = {p.stem for p in (tmp_path / "plots").iterdir()}
+    assert {"backbones", "floquet_multiplier_max_vs_excitation_3p",
+            "harmonics_pin_angle_vs_excitation_3p"} <= stems
