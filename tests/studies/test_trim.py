@@ -23,6 +23,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -39,7 +40,7 @@ from solver.rotations import rotation_about
 from solver.system import System
 from studies import rotor, trim
 from studies.parameters import ParameterError
-from studies.uh60a import UH60A
+from studies.uh60a import UH60A, blade_airstations, blade_chord
 
 Z = np.array([0.0, 0.0, 1.0])
 
@@ -412,3 +413,79 @@ def test_a_case_that_does_not_trim_fails_with_its_residuals(monkeypatch):
     monkeypatch.setattr(trim, "MAX_CORRECTIONS", 0)
     with pytest.raises(RuntimeError, match=r"not trimmed after 0 corrections.*C_T/σ off"):
         rotor.run({**COARSE, "trim": "wind_tunnel", "settle_revolutions": 1})
+
+
+def power_weighted_solidity() -> float:
+    """The UH-60A deck's chord as a solidity weighted by r³ (the weight of a section's profile
+    power, ½ ρ c c_d0 (Ωr)³ dr): σ_P = (4 N/π R⁵) ∫ c r³ dr over the lifting line, the first
+    airstation to the tip, so that the profile power of a constant c_d0 in hover is exactly
+    C_P0 = σ_P c_d0/8 (trapezoids on a fine grid of the deck's piecewise linear chord)."""
+    r_c, chord = blade_chord()
+    r = np.linspace(blade_airstations()[0][0], UH60A.radius, 20001)
+    f = np.interp(r, r_c, chord) * r**3
+    integral = float(np.sum(0.5 * (f[1:] + f[:-1]) * np.diff(r)))
+    return 4 * UH60A.n_blades * integral / (math.pi * UH60A.radius**5)
+
+
+@pytest.fixture(scope="module")
+def hover():
+    """The UH-60 rotor trimmed in the wind tunnel at zero speed (hover) to C_T/σ = 0.08,
+    coarse but with the finest Peters–He inflow (``inflow_harmonics`` = 8), with the deck's
+    profile drag and without it (c_d0 = 0: the rotor's induced power alone): (C_T, C_P) of
+    each."""
+    p = rotor.SPEC.validate({})
+    tip_speed = p.hub_speed * UH60A.radius
+    scale = p.air_density * math.pi * UH60A.radius**2 * tip_speed**3
+    out = []
+    for cd0 in (UH60A.cd0, 0.0):
+        with pytest.MonkeyPatch.context() as mp:
+            mp.setattr(rotor, "UH60A", dataclasses.replace(UH60A, cd0=cd0))
+            ds = rotor.run({**COARSE, "periodic_tolerance": HOVER_TOLERANCE,
+                            "trim": "wind_tunnel", "thrust_coefficient": 0.08,
+                            "flight_speed": 0.0, "inflow_harmonics": 8})
+        assert float(ds.thrust_coefficient_achieved) == pytest.approx(0.08, rel=5e-3)
+        out.append((float(ds.rotor_thrust_coefficient), float(ds.rotor_power) / scale))
+    return out
+
+
+# In hover the rotor is axisymmetric: the periodic response has steady fixed-frame hub loads and
+# pins at rest, and what vibratory harmonics there are, are the transient's and the Newton
+# solution's noise (about 1 N of in-plane hub force, 1.5e-5 of the thrust, at 120 steps/rev).
+# The periodicity test judges them against its floors (studies.rotor.periodic_floors: 8 N of
+# hub force); that noise is 0.1–0.17 of it, so the tolerance here is 0.25: the hub force
+# periodic to 2 N, 2.5e-5 of the thrust, which no mean load sees.
+HOVER_TOLERANCE = 0.25
+
+
+@pytest.mark.slow
+def test_hover_power_is_momentum_theory_plus_profile(hover):
+    """Hover power against momentum theory plus profile power (Johnson, *Helicopter Theory*,
+    §2.4–2.6): C_P = κ C_T^{3/2}/√2 + σ c_d0/8, κ the induced-power factor (1 for uniform
+    inflow over the whole disk). The run without profile drag gives κ, the difference of the
+    two runs the profile term, each without assuming the other."""
+    (ct, cp), (ct_i, cp_i) = hover
+    # the profile term: c_d0 = 0.008 is the model's, constant along the span and in angle of
+    # attack (the deck's airfoil tables are not public: UH60A.cd0, the GenHel value), so the
+    # profile power of the sections' drag ½ρ c c_d0 (Ωr)³ in hover is σ_P c_d0/8 exactly, with
+    # σ_P the deck's chord weighted by r³ over the lifting line: 0.0853, above the nominal
+    # 0.0821 (N c/πR, c = 0.527 m) by the trim tabs' wider chord outboard. Measured
+    # 8.20e-5 against 8.53e-5 (−3.9 %); of that, the coarse case's six aerodynamic sections
+    # integrate c r³ within 0.15 % and the inflow angle (cos φ of the drag's torque arm,
+    # φ ≈ λ/r) takes 0.3 %; the rest is not accounted for here, hence 6 %
+    sigma_p = power_weighted_solidity()
+    profile = sigma_p * UH60A.cd0 / 8
+    assert sigma_p == pytest.approx(0.0853, abs=5e-5)
+    assert cp - cp_i == pytest.approx(profile, rel=0.06)
+    # κ of the rotor without profile drag: measured 1.09. Bounds: from below, the tip loss
+    # (no lift outboard of B R, B = 0.95) puts the thrust on the smaller disk, κ ≥ 1/B = 1.053
+    # for uniform inflow over it, more for non-uniform; from above, 1.2, the top of the
+    # classical range for real rotors (Johnson §2.6: 1.1–1.2). It rests on the Peters–He
+    # inflow's radial resolution: its Galerkin projection drops the part of the loading
+    # outside its shapes, whose induced power is positive, so κ grows with the harmonics kept
+    # (with the deck's profile term: 0.97, 1.03, 1.05, 1.09 at inflow_harmonics 2, 4, 6, 8 —
+    # the coarse case's 2 gives κ < 1, which is why the finest is used here)
+    kappa = cp_i / (ct_i**1.5 / math.sqrt(2))
+    assert 1 / UH60A.tip_loss <= kappa <= 1.2
+    # and the whole: C_P (4.96e-4 at C_T = 0.00657) against κ C_T^{3/2}/√2 + σ_P c_d0/8 with
+    # that κ: measured 0.6 % below, the profile term's shortfall (it is 17 % of the power)
+    assert cp == pytest.approx(kappa * ct**1.5 / math.sqrt(2) + profile, rel=0.015)
