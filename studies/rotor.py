@@ -543,10 +543,12 @@ def _line_set(system: System, line: LiftingLine):
 # below the 4P in-plane hub force of forward flight (87 N on the coarse case at 150 ft/s with
 # free bifilars, 490 N locked), which it leaves to be judged on its own scale as before. The
 # fuselage moments' is that force on the fuselage-beam's length, the hub displacement's a
-# micrometre (the forward-flight 4P hub motion is of millimetres), the pins' 0.01° (their
-# forward-flight swing about 1°).
+# micrometre (about that force on the fuselage-beam's bending stiffness; in forward flight the
+# rotating-frame hub motion is 1.2 mm, its fixed-frame 4P excursion 24 µm with free bifilars),
+# the pins' 0.01° (their forward-flight swing about 2°). In hover the Newton solution's noise is
+# 0.1–0.2 of these floors (about 1 N, 0.2 µm).
 FLOOR_THRUST_FRACTION = 1e-4
-FLOOR_HUB_MOTION = 1e-5  # m
+FLOOR_HUB_MOTION = 1e-6  # m
 FLOOR_PIN = 0.01  # degree
 FLOOR_LOADING = 0.08  # C_T/σ of the force floor's thrust
 
