@@ -76,7 +76,7 @@ def second_harmonic_trim(ct_sigma: float, mu: float, lam: float, a: float, lock:
 
     With β = β0 + β2c cos 2ψ + β2s sin 2ψ (β1c = β1s = 0, the trim) the harmonics of the
     flap moment M_F = ½ ∫ r (U_T² θ − U_P U_T) dr, U_P = λ + r β' + μ β cos ψ, and of the
-    thrust (worked out by hand and checked symbolically) gain terms in β2 through μ β cos ψ
+    thrust (the integrals over r and ψ, done symbolically) gain terms in β2 through μ β cos ψ
     (and the 2P flap rate r β'):
 
         M_0  = θ0 (1 + μ²)/8 + μ θ1s/6 − λ/6 − μ² β2s/16
