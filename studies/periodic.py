@@ -127,7 +127,7 @@ def rev_harmonics(block: Array, n_max: int = 8) -> NDArray[np.complex128]:
 
 
 def harmonic_scales(cur: NDArray[np.complex128], groups: Sequence[int] | None = None,
-                    separate_mean: bool = False) -> Array:
+                    separate_mean: bool = False, floor: ArrayLike | None = None) -> Array:
     """The scale each harmonic of each column is judged against (same shape as ``cur``).
 
     The scale of a column is its largest harmonic, or with ``groups`` (``groups[j]`` labels
@@ -137,6 +137,13 @@ def harmonic_scales(cur: NDArray[np.complex128], groups: Sequence[int] | None = 
     mean against the larger of itself and that: a steady force of kilonewtons does not hide a
     change of a vibratory harmonic of tens of newtons, and a mean near zero is not held to
     its own tiny size. All-zero scales (locked pins) stay zero: those columns are skipped.
+
+    ``floor`` (one value per column, in its units) is the smallest scale a column is judged
+    against: a response with no vibration of its own (a rotor in hover, axisymmetric: its
+    fixed-frame hub loads steady, its pins at rest) has only the decaying transient in its
+    vibratory harmonics, whose change between revolutions stays of the order of their own
+    size however small they get; the floor says below which size a harmonic counts as zero.
+    Floors below the scales a response has change nothing.
     """
     def group_max(a: Array) -> Array:
         a = a.copy()
@@ -154,14 +161,17 @@ def harmonic_scales(cur: NDArray[np.complex128], groups: Sequence[int] | None = 
         scale[1:] = vib
     else:
         scale[:] = group_max(mag.max(axis=0))
+    if floor is not None:
+        scale = np.where(scale > 0, np.maximum(scale, np.asarray(floor, dtype=float)), 0.0)
     return scale
 
 
 def harmonic_change(cur: NDArray[np.complex128], prev: NDArray[np.complex128],
-                    groups: Sequence[int] | None = None, separate_mean: bool = False) -> float:
+                    groups: Sequence[int] | None = None, separate_mean: bool = False,
+                    floor: ArrayLike | None = None) -> float:
     """Largest change of a harmonic between two revolutions, relative to its scale
     (:func:`harmonic_scales` of ``cur``)."""
-    scale = harmonic_scales(cur, groups, separate_mean)
+    scale = harmonic_scales(cur, groups, separate_mean, floor)
     live = scale > 0
     if not np.any(live):
         return 0.0
@@ -277,8 +287,8 @@ class PeriodicRecord:
 def march(step: Callable[[], None], sample: Callable[[], Array],
           signals: Callable[[Array], Array], *, steps_per_rev: int, revolutions: int,
           max_revolutions: int, tolerance: float, groups: Sequence[int] | None = None,
-          separate_mean: bool = False, min_revolutions: int = 2,
-          hint: str = "raise max_revolutions", window: int = 0,
+          separate_mean: bool = False, floor: ArrayLike | None = None,
+          min_revolutions: int = 2, hint: str = "raise max_revolutions", window: int = 0,
           max_residual: float = 0.1,
           before_recording: Callable[[], None] | None = None) -> PeriodicRecord:
     """March until periodic, then record ``revolutions`` whole revolutions.
@@ -310,9 +320,10 @@ def march(step: Callable[[], None], sample: Callable[[], Array],
         Steps per revolution; revolutions recorded; revolutions allowed for the transient;
         largest relative harmonic change between successive revolutions (or estimates)
         that counts as periodic.
-    groups, separate_mean
+    groups, separate_mean, floor
         How changes are measured (:func:`harmonic_change`): group labels of the signal
-        columns that share a scale; the mean judged apart from the vibratory harmonics.
+        columns that share a scale; the mean judged apart from the vibratory harmonics; the
+        smallest scale of each signal column.
     min_revolutions
         Revolutions marched at least before periodicity is tested.
     hint
@@ -346,7 +357,7 @@ def march(step: Callable[[], None], sample: Callable[[], Array],
         rev += 1
         cur = rev_harmonics(signals(block))
         if prev is not None:
-            change = harmonic_change(cur, prev, groups, separate_mean)
+            change = harmonic_change(cur, prev, groups, separate_mean, floor)
             done = rev >= min_revolutions and change <= tolerance
             report(f"revolution {rev} of at most {max_revolutions}: periodicity change "
                    f"{change:.2e}, tolerance {tolerance:g}" + (" (periodic: recording)"
@@ -358,12 +369,13 @@ def march(step: Callable[[], None], sample: Callable[[], Array],
             blocks = [*blocks[-window:], block]
             harms = [*harms[-window:], cur]
             if len(blocks) == window + 1:
-                scale = harmonic_scales(cur, groups, separate_mean)
+                scale = harmonic_scales(cur, groups, separate_mean, floor)
                 live = scale > 0
                 gamma, residual = rre_weights([h[live] / scale[live] for h in harms])
                 est = np.tensordot(gamma, np.array(harms[1:]), axes=1)
                 if prev_est is not None:
-                    est_change = harmonic_change(est, prev_est, groups, separate_mean)
+                    est_change = harmonic_change(est, prev_est, groups, separate_mean,
+                                                 floor)
                     done = est_change <= tolerance and residual <= max_residual
                     report(f"revolution {rev}: extrapolated periodic response changed by "
                            f"{est_change:.2e} (unexplained part of the last change "
@@ -417,6 +429,7 @@ def shoot(integ, sample: Callable[[], Array], signals: Callable[[Array], Array],
           observe: Callable[[Array, int], Array], symmetry, system, steps_per_rev: int,
           revolutions: int, max_revolutions: int, tolerance: float,
           groups: Sequence[int] | None = None, separate_mean: bool = False,
+          floor: ArrayLike | None = None, observe_floor: ArrayLike | None = None,
           window: int = 12, max_restarts: int = 4, restart_fraction: float = 0.5,
           max_residual: float = 0.1, min_iterates: int = 4, secant: bool = False,
           hint: str = "raise max_revolutions") -> PeriodicRecord:
@@ -465,12 +478,15 @@ def shoot(integ, sample: Callable[[], Array], signals: Callable[[Array], Array],
     integ
         The integrator (its ``q``, ``v``, ``t``, ``state``/``restore`` are used).
     sample, signals, steps_per_rev, revolutions, max_revolutions, tolerance, groups,
-    separate_mean
+    separate_mean, floor
         As for :func:`march`.
     observe
         ``observe(block, j)``: the observations of the j-th iterate's block of samples
         (steps_per_rev / N rows) at the starting phase, e.g. non-rotating signals as they are
         and per-sector signals rolled by j sectors.
+    observe_floor
+        The smallest scale of each observed column (its units), as ``floor`` is of the
+        signals': what the restarts and the extrapolation judge changes against.
     symmetry
         :class:`solver.symmetry.CyclicSymmetry` or ``None`` (the one-revolution map).
     system
@@ -517,8 +533,12 @@ def shoot(integ, sample: Callable[[], Array], signals: Callable[[Array], Array],
     def observed_scale(o: Array) -> Array:
         # each observed column on its own scale: its largest value, or with separate_mean its
         # largest excursion from its mean (a steady force of kilonewtons must not hide the
-        # change of a vibratory one, as in the periodicity test)
-        return np.abs(o - o.mean(axis=0) if separate_mean else o).max(axis=0)
+        # change of a vibratory one, as in the periodicity test), at least its floor
+        scale = np.abs(o - o.mean(axis=0) if separate_mean else o).max(axis=0)
+        if observe_floor is None:
+            return scale
+        return np.where(scale > 0, np.maximum(scale, np.asarray(observe_floor, dtype=float)),
+                        0.0)
 
     def unsettled(run: list[tuple[Array, int]], seen: list[Array]) -> list[tuple[Array, int]]:
         # the run (``seen``: its blocks' observations) up to its first iterate that changed by
@@ -555,7 +575,7 @@ def shoot(integ, sample: Callable[[], Array], signals: Callable[[Array], Array],
         if len(blocks) >= 2 * n_sec and len(blocks) % n_sec == 0:
             cur = rev_harmonics(signals(np.concatenate(blocks[-n_sec:])))
             prev = rev_harmonics(signals(np.concatenate(blocks[-2 * n_sec : -n_sec])))
-            change = harmonic_change(cur, prev, groups, separate_mean)
+            change = harmonic_change(cur, prev, groups, separate_mean, floor)
             # Before the first restart the test must wait while a restart may still come: from
             # a start within the tolerance of the periodic response (the reduced model's,
             # studies.reduced_hub) the change between revolutions shows only the decay of the

@@ -119,6 +119,31 @@ def test_march_raises_when_not_periodic():
               max_revolutions=6, tolerance=1e-9, window=4)
 
 
+def test_floor_judges_a_response_without_vibration_against_it():
+    """A hover-like signal: a steady mean and only a decaying free mode (0.7 per rev, its
+    amplitude falling by 10 % a revolution). Relative to its own vibratory harmonics the
+    change between revolutions stays of order 1 however small the mode gets; against a floor
+    it is the mode's size over the floor; a floor below the scale changes nothing."""
+    t = np.arange(2 * N) / N
+
+    def revolution(amp: float) -> np.ndarray:
+        free = amp * np.exp(-0.105 * t) * np.cos(2 * np.pi * 0.7 * t)
+        return np.column_stack([5.0 + free, free])
+
+    for amp in (1e-3, 1e-9):
+        both = revolution(amp)
+        cur, prev = rev_harmonics(both[N:]), rev_harmonics(both[:N])
+        assert harmonic_change(cur, prev, [0, 0], separate_mean=True) > 0.1
+        floored = harmonic_change(cur, prev, [0, 0], separate_mean=True, floor=[1.0, 1.0])
+        # every harmonic of the free part on the floor's scale (the steady 5 on its own)
+        assert floored == pytest.approx(np.abs(cur - prev)[:, 1].max(), rel=1e-12)
+        assert floored < amp
+    both = revolution(1.0)
+    cur, prev = rev_harmonics(both[N:]), rev_harmonics(both[:N])
+    assert harmonic_change(cur, prev, [0, 0], True, floor=[1e-3, 1e-3]) == harmonic_change(
+        cur, prev, [0, 0], True)
+
+
 def test_window_of_one_is_refused():
     def params(**kw):  # the attributes check reads, as a model's Parameters has them
         return SimpleNamespace(**{**{name: prm.default for name, prm in PARAMETERS.items()},

@@ -8,18 +8,25 @@
 * the trim on a multibody rotor built here from solver parts — one rigid, untwisted blade on a
   flap hinge at the centre, driven pitch bearing, quasi-steady lifting line, prescribed
   uniform inflow — finds the collective and cyclics of the same rigid-rotor equations solved
-  with the higher flapping harmonics within 0.5 %, and of the classical closed form (first
-  harmonics) within 1 % (θ0, θ1s) and 1.5 % / 4.5 % (θ1c, the truncation) at μ = 0.15 and
-  0.3 (the trim loop of the UH-60 case, on this model: Newton with the closed-form Jacobian,
-  Broyden updates from the periodic responses);
+  with the higher flapping harmonics within 0.5 %, and of the closed form with the second
+  flapping harmonic's coupling into the first-harmonic pitch balance (derived below) within
+  1 % at μ = 0.15 and 0.3; the classical closed form (first harmonics) has θ0, θ1s within
+  1 % but θ1c only within 1.5 % / 4.5 %, its truncation (the trim loop of the UH-60 case, on
+  this model: Newton with the closed-form Jacobian, Broyden updates from the periodic
+  responses);
+* the second-harmonic closed form against the rigid rotor solved numerically;
 * the UH-60 model trimmed (wind tunnel and propulsive, coarse case): targets met, controls
   archived, cost at most about twice the untrimmed case (slow tier);
+* its power (slow tier): in forward flight against induced + profile + parasite; in hover
+  against momentum theory plus profile power, C_P = κ C_T^{3/2}/√2 + σ c_d0/8, with κ and the
+  profile term each measured; the power curve's bucket from 40 to 120 kt;
 * bad input refused with the parameter named; a case that does not trim fails with its
   residuals.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -36,7 +43,7 @@ from solver.rotations import rotation_about
 from solver.system import System
 from studies import rotor, trim
 from studies.parameters import ParameterError
-from studies.uh60a import UH60A
+from studies.uh60a import UH60A, blade_airstations, blade_chord
 
 Z = np.array([0.0, 0.0, 1.0])
 
@@ -60,6 +67,64 @@ def closed_form_trim(ct_sigma: float, mu: float, lam: float, a: float, lock: flo
     beta0 = lock * (th0 * (1 + mu**2) / 8 + mu * th1s / 6 - lam / 6)
     th1c = (4 / 3) * mu * beta0 / (1 + mu**2 / 2)
     return th0, th1c, th1s, beta0
+
+
+def second_harmonic_trim(ct_sigma: float, mu: float, lam: float, a: float, lock: float
+                         ) -> tuple[np.ndarray, float, float]:
+    """The wind-tunnel trim of :func:`closed_form_trim`'s rotor with the second flapping
+    harmonic's coupling into the first-harmonic pitch balance, in closed form.
+
+    With β = β0 + β2c cos 2ψ + β2s sin 2ψ (β1c = β1s = 0, the trim) the harmonics of the
+    flap moment M_F = ½ ∫ r (U_T² θ − U_P U_T) dr, U_P = λ + r β' + μ β cos ψ, and of the
+    thrust (the integrals over r and ψ, done symbolically) gain terms in β2 through μ β cos ψ
+    (and the 2P flap rate r β'):
+
+        M_0  = θ0 (1 + μ²)/8 + μ θ1s/6 − λ/6 − μ² β2s/16
+        M_1c = θ1c (1/8 + μ²/16) − μ β0/6 + μ β2c/12
+        M_1s = θ1s (1/8 + 3μ²/16) + μ θ0/3 − μ λ/4 + μ β2s/12
+        M_2c = −β2s/4 − (μ² θ0/8 + μ θ1s/6)                 = −β2s/4 − A
+        M_2s =  β2c/4 + (μ θ1c/6 − μ² β0/8)                 =  β2c/4 + B
+        C_T/σ = (a/2) [θ0 (1/3 + μ²/2) + μ θ1s/2 − λ/2 − μ² β2s/4]
+
+    and the flap equation β'' + β = γ M_F balanced on each harmonic n, (1 − n²) β_n = γ M_n,
+    gives β0 = γ M_0, M_1c = M_1s = 0 and, at n = 2, the 2 × 2 system −3 β2c = γ M_2c,
+    −3 β2s = γ M_2s (the 2P flap has aerodynamic damping γ/4 against its stiffness −3), solved
+    by hand:
+
+        β2c = γ (3 A − γ B/4) / (9 + γ²/16),   β2s = −γ (γ A/4 + 3 B) / (9 + γ²/16).
+
+    A and B are O(μ²) at the classical trim (θ1s ≈ −(8/3) μ θ0, θ1c ≈ (4/3) μ β0), so β2 is
+    O(μ²) and its feedback on the first harmonics (μ β2/12) changes θ1c by O(μ²) relative —
+    the classical truncation's 1–4 % at μ = 0.15–0.3. It is taken to that order: A and B from
+    the classical trim, then the balances above with those β2:
+
+        θ1s = −(8/3) μ (θ0 − 3λ/4 + β2s/4) / (1 + 3μ²/2)          (M_1s = 0)
+        θ0  from C_T/σ with that θ1s (linear in θ0)
+        β0  = γ M_0
+        θ1c = (4/3) μ (β0 − β2c/2) / (1 + μ²/2)                   (M_1c = 0)
+
+    What is left out is O(μ⁴) relative: the 3P flapping (fed by μ β2 cos ψ, feeding back
+    μ β3 into the 2P balance) and the second pass of the substitution. Against the same
+    equations with 8 flapping harmonics solved numerically (:func:`harmonic_balance_trim`),
+    measured 0.003 % (μ = 0.15) and 0.045 % (0.3) at most, against the classical 0.85 % and
+    3.5 % on θ1c.
+
+    Returns ((θ0, θ1c, θ1s), β2c, β2s), rad."""
+    th0, th1c, th1s, beta0 = closed_form_trim(ct_sigma, mu, lam, a, lock)
+    big_a = mu**2 * th0 / 8 + mu * th1s / 6
+    big_b = mu * th1c / 6 - mu**2 * beta0 / 8
+    det = 9 + lock**2 / 16
+    b2c = lock * (3 * big_a - lock * big_b / 4) / det
+    b2s = -lock * (lock * big_a / 4 + 3 * big_b) / det
+    k = -(8 / 3) * mu / (1 + 1.5 * mu**2)  # θ1s = k (θ0 + c)
+    c = -0.75 * lam + b2s / 4
+    # C_T/σ·2/a = θ0 (1/3 + μ²/2) + (μ/2) k (θ0 + c) − λ/2 − μ² β2s/4, linear in θ0
+    th0 = (2 * ct_sigma / a + lam / 2 + mu**2 * b2s / 4 - 0.5 * mu * k * c) / (
+        1 / 3 + mu**2 / 2 + mu * k / 2)
+    th1s = k * (th0 + c)
+    beta0 = lock * (th0 * (1 + mu**2) / 8 + mu * th1s / 6 - lam / 6 - mu**2 * b2s / 16)
+    th1c = (4 / 3) * mu * (beta0 - b2c / 2) / (1 + mu**2 / 2)
+    return np.array([th0, th1c, th1s]), b2c, b2s
 
 
 @pytest.mark.parametrize("mu", [0.1, 0.25, 0.35])
@@ -207,19 +272,43 @@ def test_wind_tunnel_trim_against_the_closed_form(mu):
     tilt = math.radians(4.0)
     x, lam, r, revs = trim_rigid_blade_rotor(mu, LIGHT, tilt)
     assert abs(r[0]) < 1e-6 and np.abs(r[1:]).max() < 1e-7, (r, revs)
+    hb = harmonic_balance_trim(LIGHT, mu, lam)
+    closed = second_harmonic_trim(LIGHT, mu, lam, SLOPE, LOCK)[0]
+    classical = np.array(closed_form_trim(LIGHT, mu, lam, SLOPE, LOCK)[:3])
     # the same equations with the higher flapping harmonics kept: measured within 0.17 %
     # (μ = 0.15) and 0.14 % (0.3) for θ0, 0.35 % and 0.17 % for θ1c, 0.33 % and 0.29 % for θ1s
-    hb = harmonic_balance_trim(LIGHT, mu, lam)
     assert x == pytest.approx(hb, rel=0.005)
-    # the classical closed form (first harmonics only): θ0 within 0.19 % and 0.37 %, θ1s
-    # within 0.47 % and 0.97 %; θ1c 1.2 % and 3.8 % off, the truncation of the flapping
-    # harmonics (the harmonic balance above, whose θ1c the multibody rotor matches, differs
-    # from it by as much)
-    th0, th1c, th1s, _ = closed_form_trim(LIGHT, mu, lam, SLOPE, LOCK)
-    assert x[0] == pytest.approx(th0, rel=0.01)
-    assert x[2] == pytest.approx(th1s, rel=0.01)
-    assert x[1] == pytest.approx(th1c, rel={0.15: 0.015, 0.3: 0.045}[mu])
-    assert hb[1] == pytest.approx(th1c, rel={0.15: 0.015, 0.3: 0.045}[mu])
+    # the closed form with the second flapping harmonic (:func:`second_harmonic_trim`): all
+    # three controls within 1 % (measured 0.17 % and 0.13 % for θ0, 0.35 % and 0.18 % for
+    # θ1c, 0.33 % and 0.24 % for θ1s: what is left is the multibody rotor's own difference
+    # from the small-angle equations, as against the harmonic balance above)
+    assert x == pytest.approx(closed, rel=0.01)
+    # the classical closed form (first harmonics only) has θ0 and θ1s within 1 % (measured
+    # 0.19 % and 0.37 %, 0.47 % and 0.97 %), but its θ1c is 1.2 % (μ = 0.15) and 3.8 % (0.3)
+    # off: the truncation of the flapping harmonics, which the second harmonic's coupling
+    # above removes
+    assert x[[0, 2]] == pytest.approx(classical[[0, 2]], rel=0.01)
+    assert x[1] == pytest.approx(classical[1], rel={0.15: 0.015, 0.3: 0.045}[mu])
+
+
+@pytest.mark.parametrize("mu", [0.15, 0.3])
+def test_second_harmonic_closed_form_is_the_harmonic_balance_to_its_order(mu):
+    """:func:`second_harmonic_trim`'s algebra against the rigid rotor solved numerically:
+    its β2 is the 2P flapping that :class:`studies.trim.RigidRotor` with two harmonics
+    returns at its controls, and its controls are those of eight harmonics to O(μ⁴)."""
+    lam = 0.02
+    x, b2c, b2s = second_harmonic_trim(LIGHT, mu, lam, SLOPE, LOCK)
+    ct, beta = trim.RigidRotor(SLOPE, 0.08, LOCK, harmonics=2).response(x, mu, lam)
+    # the closed form's controls are one substitution from the 2-harmonic trim: what is left
+    # of its residuals is the next order (measured C_T/σ 1.1e-6 and 6.2e-5 relative at
+    # μ = 0.15 and 0.3, β1c and β1s below 0.00075°), and its β2, from the classical trim's
+    # controls, is the 2P response at its own within 1.5 % and 3.5 % (β2s; β2c 0.5 % and 2 %)
+    assert ct == pytest.approx(LIGHT, rel=1e-4)
+    assert np.abs(beta[1:3]).max() < math.radians(0.001)
+    assert beta[3:] == pytest.approx([b2c, b2s], rel={0.15: 0.02, 0.3: 0.05}[mu])
+    # and the 8-harmonic trim: measured within 0.003 % (μ = 0.15) and 0.045 % (0.3)
+    hb = harmonic_balance_trim(LIGHT, mu, lam)
+    assert x == pytest.approx(hb, rel={0.15: 1e-4, 0.3: 1e-3}[mu])
 
 
 # ---- the UH-60 model ---------------------------------------------------------------------------
@@ -327,3 +416,123 @@ def test_a_case_that_does_not_trim_fails_with_its_residuals(monkeypatch):
     monkeypatch.setattr(trim, "MAX_CORRECTIONS", 0)
     with pytest.raises(RuntimeError, match=r"not trimmed after 0 corrections.*C_T/σ off"):
         rotor.run({**COARSE, "trim": "wind_tunnel", "settle_revolutions": 1})
+
+
+def power_weighted_solidity() -> float:
+    """The UH-60A deck's chord as a solidity weighted by r³ (the weight of a section's profile
+    power, ½ ρ c c_d0 (Ωr)³ dr): σ_P = (4 N/π R⁵) ∫ c r³ dr over the lifting line, the first
+    airstation to the tip, so that the profile power of a constant c_d0 in hover is exactly
+    C_P0 = σ_P c_d0/8 (trapezoids on a fine grid of the deck's piecewise linear chord)."""
+    r_c, chord = blade_chord()
+    r = np.linspace(blade_airstations()[0][0], UH60A.radius, 20001)
+    f = np.interp(r, r_c, chord) * r**3
+    integral = float(np.sum(0.5 * (f[1:] + f[:-1]) * np.diff(r)))
+    return 4 * UH60A.n_blades * integral / (math.pi * UH60A.radius**5)
+
+
+@pytest.fixture(scope="module")
+def hover():
+    """The UH-60 rotor trimmed in the wind tunnel at zero speed (hover) to C_T/σ = 0.08,
+    coarse but with the finest Peters–He inflow (``inflow_harmonics`` = 8), with the deck's
+    profile drag and without it (c_d0 = 0: the rotor's induced power alone): (C_T, C_P) of
+    each."""
+    p = rotor.SPEC.validate({})
+    tip_speed = p.hub_speed * UH60A.radius
+    scale = p.air_density * math.pi * UH60A.radius**2 * tip_speed**3
+    out = []
+    for cd0 in (UH60A.cd0, 0.0):
+        with pytest.MonkeyPatch.context() as mp:
+            mp.setattr(rotor, "UH60A", dataclasses.replace(UH60A, cd0=cd0))
+            ds = rotor.run({**COARSE, "periodic_tolerance": HOVER_TOLERANCE,
+                            "trim": "wind_tunnel", "thrust_coefficient": 0.08,
+                            "flight_speed": 0.0, "inflow_harmonics": 8})
+        assert float(ds.thrust_coefficient_achieved) == pytest.approx(0.08, rel=5e-3)
+        out.append((float(ds.rotor_thrust_coefficient), float(ds.rotor_power) / scale))
+    return out
+
+
+# In hover the rotor is axisymmetric: the periodic response has steady fixed-frame hub loads and
+# pins at rest, and what vibratory harmonics there are, are the transient's and the Newton
+# solution's noise (about 1 N of in-plane hub force, 1.5e-5 of the thrust, at 120 steps/rev).
+# The periodicity test judges them against its floors (studies.rotor.periodic_floors: 8 N of
+# hub force); that noise is 0.1–0.17 of it, so the tolerance here is 0.25: the hub force
+# periodic to 2 N, 2.5e-5 of the thrust, which no mean load sees.
+HOVER_TOLERANCE = 0.25
+
+
+@pytest.mark.slow
+def test_hover_power_is_momentum_theory_plus_profile(hover):
+    """Hover power against momentum theory plus profile power (Johnson, *Helicopter Theory*,
+    §2.4–2.6): C_P = κ C_T^{3/2}/√2 + σ c_d0/8, κ the induced-power factor (1 for uniform
+    inflow over the whole disk). The run without profile drag gives κ, the difference of the
+    two runs the profile term, each without assuming the other."""
+    (ct, cp), (ct_i, cp_i) = hover
+    # the profile term: c_d0 = 0.008 is the model's, constant along the span and in angle of
+    # attack (the deck's airfoil tables are not public: UH60A.cd0, the GenHel value), so the
+    # profile power of the sections' drag ½ρ c c_d0 (Ωr)³ in hover is σ_P c_d0/8 exactly, with
+    # σ_P the deck's chord weighted by r³ over the lifting line: 0.0853, above the nominal
+    # 0.0821 (N c/πR, c = 0.527 m) by the trim tabs' wider chord outboard. Measured
+    # 8.20e-5 against 8.53e-5 (−3.9 %); of that, the coarse case's six aerodynamic sections
+    # integrate c r³ within 0.15 % and the inflow angle (cos φ of the drag's torque arm,
+    # φ ≈ λ/r) takes 0.3 %; the rest is not accounted for here, hence 6 %
+    sigma_p = power_weighted_solidity()
+    profile = sigma_p * UH60A.cd0 / 8
+    assert sigma_p == pytest.approx(0.0853, abs=5e-5)
+    assert cp - cp_i == pytest.approx(profile, rel=0.06)
+    # κ of the rotor without profile drag: measured 1.09. Bounds: from below, the tip loss
+    # (no lift outboard of B R, B = 0.95) puts the thrust on the smaller disk, κ ≥ 1/B = 1.053
+    # for uniform inflow over it, more for non-uniform; from above, 1.2, the top of the
+    # classical range for real rotors (Johnson §2.6: 1.1–1.2). It rests on the Peters–He
+    # inflow's radial resolution: its Galerkin projection drops the part of the loading
+    # outside its shapes, whose induced power is positive, so κ grows with the harmonics kept
+    # (with the deck's profile term: 0.97, 1.03, 1.05, 1.09 at inflow_harmonics 2, 4, 6, 8 —
+    # the coarse case's 2 gives κ < 1, which is why the finest is used here)
+    kappa = cp_i / (ct_i**1.5 / math.sqrt(2))
+    assert 1 / UH60A.tip_loss <= kappa <= 1.2
+    # and the whole: C_P (4.96e-4 at C_T = 0.00657) against κ C_T^{3/2}/√2 + σ_P c_d0/8 with
+    # that κ: measured 0.6 % below, the profile term's shortfall (it is 17 % of the power)
+    assert cp == pytest.approx(kappa * ct**1.5 / math.sqrt(2) + profile, rel=0.015)
+
+
+@pytest.fixture(scope="module")
+def power_curve():
+    """The UH-60 rotor propulsively trimmed at 40, 80 and 120 kt on the coarse case with the
+    envelope study's 10 settling revolutions (locked bifilars): (speed in m/s, C_T, shaft
+    tilt in rad, C_P) of each."""
+    p = rotor.SPEC.validate({})
+    tip_speed = p.hub_speed * UH60A.radius
+    scale = p.air_density * math.pi * UH60A.radius**2 * tip_speed**3
+    out = []
+    for knots in (40, 80, 120):
+        speed = knots * 0.514444
+        ds = rotor.run({**COARSE, "settle_revolutions": 10, "trim": "propulsive",
+                        "flight_speed": speed, "bifilar": "locked"})
+        out.append((speed, float(ds.rotor_thrust_coefficient),
+                    math.radians(float(ds.control_shaft_tilt)), float(ds.rotor_power) / scale))
+    return out
+
+
+@pytest.mark.slow
+def test_power_curve_has_its_bucket(power_curve):
+    """Power against speed falls, as the induced power falls with the mass flow, and rises
+    again, as the parasite power grows as U³: the bucket. Each point against the classical
+    sum of :func:`test_forward_flight_power_is_induced_profile_and_parasite`."""
+    p = rotor.SPEC.validate({})
+    tip_speed = p.hub_speed * UH60A.radius
+    scale = p.air_density * math.pi * UH60A.radius**2 * tip_speed**3
+    profile0 = power_weighted_solidity() * UH60A.cd0 / 8
+    for speed, ct, a, cp in power_curve:
+        mu = speed * math.cos(a) / tip_speed
+        induced = ct * glauert_inflow(ct, mu, speed * math.sin(a) / tip_speed) / UH60A.tip_loss
+        profile = profile0 * (1 + 4.65 * mu**2)
+        parasite = 0.5 * p.air_density * speed**3 * p.flat_plate_area / scale
+        total = induced + profile + parasite
+        # measured −3.9 % (40 kt), −1.5 % (80 kt), −0.5 % (120 kt), induced power 66, 41 and
+        # 21 % of the sum: the shortfall follows the induced share, the coarse case's
+        # Peters–He inflow (2 harmonics) giving less induced power than κ = 1/B (in hover its
+        # κ is 0.97, test_hover_power_is_momentum_theory_plus_profile)
+        assert cp == pytest.approx(total, rel=0.05)
+    # measured C_P 2.60e-4, 2.25e-4, 3.02e-4 (722, 625, 836 kW); 60 kt gives 640 kW, so the
+    # bottom of the bucket is near 80 kt on this case
+    cps = [c[3] for c in power_curve]
+    assert cps[0] > cps[1] < cps[2]
