@@ -56,7 +56,6 @@ from studies.reduced_hub import (
     tangent_angle,
 )
 
-Z = np.array([0.0, 0.0, 1.0])
 BALANCE_HARMONICS = 24  # σ_0's harmonics on a branch (module docstring)
 BALANCE_SAMPLES = 128
 SWING_SCALE = np.radians(20.0)  # rad: the swing's scale in the arclength (balance_branch)
@@ -64,7 +63,7 @@ OUTPUT_SAMPLES = 64  # samples of the revolution a harmonic-balance point archiv
 # the backbone's swing amplitudes (degree): the holes cover the path to 70°
 BACKBONE_AMPLITUDES = np.arange(2.0, 70.1, 2.0)
 # a multiplier this far outside the unit circle, or closer, counts as on it (stable): the
-# accuracy Hill's method and the shooting Jacobian give the multipliers to (tests)
+# sector monodromy's multipliers are right to 2e-8, the shooting Jacobian's to ~1e-5 (tests)
 STABILITY_MARGIN = 1e-6
 # The shooting map's Newton matrix by forward differences of this step in the scaled
 # coordinates (1e-5 of 1° of swing): its truncation error, ~1e-5 relative, is also the
@@ -178,8 +177,15 @@ def balance_branch(p: Parameters, c: Continuation) -> list[BranchPoint]:
         facts = _facts(q, d, iterations=pt.iterations, change=sol.residual,
                        seconds=time.perf_counter() - t0, samples=OUTPUT_SAMPLES)
         t = 2 * np.pi / q.hub_speed * np.arange(OUTPUT_SAMPLES) / OUTPUT_SAMPLES
-        result = _point_result(q.hub_speed, hub.solution_rows(q, d, sol, t), facts, note)
+        result = _point_result(q.hub_speed, hub.solution_rows(q, d, sol, t), facts)
         points.append(BranchPoint(pt.parameter, result, mult, _stable(mult), pt.fold))
+    return _noted(points, note)
+
+
+def _noted(points: list[BranchPoint], note: str) -> list[BranchPoint]:
+    """``points`` with why the branch ended early (if it did) as their results' message."""
+    for pt in points:
+        pt.result.attrs["message"] = note
     return points
 
 
@@ -217,10 +223,10 @@ def _facts(p: Parameters, d: hub.HubDesign, *, iterations: int, change: float,
     }
 
 
-def _point_result(omega: float, rows: np.ndarray, facts: dict[str, np.generic],
-                  note: str) -> xr.Dataset:
+def _point_result(omega: float, rows: np.ndarray, facts: dict[str, np.generic]
+                  ) -> xr.Dataset:
     return hub.SPEC.dataset({**hub.recorded_outputs(omega, rows), **facts},
-                            {"message": note})
+                            {"message": ""})
 
 
 class QuarterMap:
@@ -388,9 +394,9 @@ def shooting_branch(p: Parameters, c: Continuation) -> list[BranchPoint]:
                        change=float(np.max(np.abs(residual(pt.x, pt.parameter)))),
                        seconds=time.perf_counter() - t0, samples=q.steps_per_rev,
                        revolutions=spent["revolutions"], steps=int(spent["steps"]))
-        points.append(BranchPoint(pt.parameter, _point_result(q.hub_speed, rows, facts, note),
+        points.append(BranchPoint(pt.parameter, _point_result(q.hub_speed, rows, facts),
                                   mult, _stable(mult), pt.fold))
-    return points
+    return _noted(points, note)
 
 
 def _record(qm: QuarterMap, y: np.ndarray) -> np.ndarray:
