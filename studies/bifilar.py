@@ -387,4 +387,4 @@ def _check_params(p: Parameters) -> None:
 
 SPEC = ModelSpec("pendulum", PARAMETERS, simulate, _check_params,
                  description="one bifilar pendulum on a hub spinning at constant speed",
-                 outputs=OUTPUTS, version="2", warm_up=(compile_kernels,))
+                 outputs=OUTPUTS, version="3", warm_up=(compile_kernels,))

@@ -215,9 +215,16 @@ def design(shape: str, geometry: Geometry, tuning_order: float | None = None,
         c1, c2 = None, None
         s_max = 2.0 * MAX_TANGENT_ANGLE
     else:
-        n2 = r_v / rho - 1.0  # pin-less order² of the osculating design (errata 6)
-        b = 0.5 * r_v * (1.0 - np.sqrt(n2 / (1.0 + n2)))
-        a = r_v - 2.0 * b
+        # The swing's potential is −½Ω²M|Γ + e|², M = m_b + m_p/2: the pins' centres run on
+        # half the mass's path, so the field acts as if centred at −e, e = m_p(R0 − Rm)/2M
+        # from the hub centre. The tautochrone is the epicycloid about that centre, with the
+        # vertex curvature radius ρ of Eq. (7): its small-swing order is Eq. (7)'s exactly.
+        shift = g.pin_mass * (g.arm_radius - g.cm_offset) / (
+            2.0 * (g.tuning_mass + 0.5 * g.pin_mass))
+        r_c = r_v + shift  # the vertex's distance from the field's centre
+        n2 = r_c / rho - 1.0  # pin-less order² about that centre (errata 6)
+        b = 0.5 * r_c * (1.0 - np.sqrt(n2 / (1.0 + n2)))
+        a = r_c - 2.0 * b
         k = (a + b) / b
         # |Γ|² = (a+b)² + b² − 2b(a+b) cos((k−1)φ): the vertex (farthest point) is at
         # (k − 1)φ = π, i.e. φ_v = π b/a, where |Γ| = a + 2b
@@ -228,7 +235,7 @@ def design(shape: str, geometry: Geometry, tuning_order: float | None = None,
             x = (a + b) * np.cos(ph) - b * np.cos(k * ph)
             y = (a + b) * np.sin(ph) - b * np.sin(k * ph)
             c, sn = np.cos(phi_v), np.sin(phi_v)  # rotate the vertex onto +x
-            return np.stack([c * x + sn * y, -sn * x + c * y], axis=-1)
+            return np.stack([c * x + sn * y - shift, -sn * x + c * y], axis=-1)
 
         def dpath(s):
             ph = phi_v + s
@@ -239,7 +246,7 @@ def design(shape: str, geometry: Geometry, tuning_order: float | None = None,
 
         def sigma_of_angle(ang):
             return 2.0 * ang / (k + 1.0)  # tangent angle is (k + 1)φ/2 + const
-        params.update(epicycloid_a=a, epicycloid_b=b)
+        params.update(epicycloid_a=a, epicycloid_b=b, epicycloid_centre_shift=shift)
         c1, c2 = None, None
         s_max = 2.0 * MAX_TANGENT_ANGLE / (k + 1.0)
     holes = Holes(shape, g, rho, c1, c2, path, dpath, sigma_of_angle, order, d_hole, params)
