@@ -31,7 +31,7 @@ from studies.reduced_hub import (
     _newton,
     _swing_residual,
     path_terms,
-    tangent_angle,
+    swing_stiffness,
 )
 
 Array = NDArray[np.float64]
@@ -45,12 +45,6 @@ def _free_model(holes: Holes, hub_speed: float) -> ReducedHub:
     """One bifilar on a fixed, unforced hub without rolling resistance."""
     return ReducedHub(holes, hub_speed, np.zeros(1), 1.0, 0.0, 0.0, np.zeros(0),
                       np.zeros(0, dtype=complex), 0.0)
-
-
-def _stiffness(holes: Holes, hub_speed: float) -> float:
-    g = holes.geometry
-    return hub_speed**2 * holes.rho_v * (g.tuning_mass * (g.arm_radius + g.cm_offset)
-                                         + g.pin_mass * g.arm_radius)
 
 
 def _residual(model: ReducedHub, coeffs: Array, order: float, samples: int) -> Array:
@@ -68,7 +62,7 @@ def _residual(model: ReducedHub, coeffs: Array, order: float, samples: int) -> A
                         zero.astype(complex), zero)
     proj = (c.T @ r) * (2.0 / samples)
     proj[0] *= 0.5
-    return proj / _stiffness(model.holes, model.hub_speed)
+    return proj / swing_stiffness(model.holes, model.hub_speed)
 
 
 def backbone(holes: Holes, hub_speed: float, amplitudes: Array,
@@ -146,7 +140,3 @@ def order_by_quadrature(holes: Holes, hub_speed: float, amplitude: float,
     period = 2 * (half(sigma_a) + half(sigma_b))
     return 2 * np.pi / period / hub_speed
 
-
-def pin_amplitude(holes: Holes, sigma: float) -> float:
-    """The pin angle (rad) at path parameter ``sigma``."""
-    return float(tangent_angle(holes, np.array([sigma]))[0][0])

@@ -517,12 +517,7 @@ def simulate(p: Parameters) -> xr.Dataset:
     sym = symmetry(sysm, hub, shaft, parts) if p.shooting_window else None
 
     def integrator(n: int):
-        """The time integration at n steps per revolution."""
-        # harmonics do not need the roundoff-level solve that exact energy bookkeeping needs:
-        # measured on the free case, 1e-8 instead of 1e-11 moves every archived output by
-        # ≤ 4e-10 of its scale and takes 3.13 → 2.26 Newton iterations per step
-        integ = make_integrator(sysm, "ep", 2 * np.pi / omega / n, tol=NEWTON_TOL)
-        return integ if p.composition == "none" else Composed(integ, p.composition)
+        return time_integration(p, sysm, n)
 
     def sampler(integ):
         return recorder(integ, d, absorbers, os_)
@@ -635,6 +630,19 @@ def simulate(p: Parameters) -> xr.Dataset:
     return ds
 
 
+def time_integration(p: Parameters, system: System, steps_per_rev: int | None = None,
+                     tol: float = NEWTON_TOL):
+    """The hub's time integration of ``system``: the ``ep`` step at ``steps_per_rev`` (default
+    the case's) steps a revolution, composed as ``composition`` says, its Newton solved to
+    ``tol`` relative. Harmonics do not need the roundoff-level solve that exact energy
+    bookkeeping needs: measured on the free case, the default 1e-8 instead of 1e-11 moves
+    every archived output by ≤ 4e-10 of its scale and takes 3.13 → 2.26 Newton iterations a
+    step."""
+    n = steps_per_rev or p.steps_per_rev
+    integ = make_integrator(system, "ep", 2 * np.pi / p.hub_speed / n, tol=tol)
+    return integ if p.composition == "none" else Composed(integ, p.composition)
+
+
 def recorder(integ, d: HubDesign, absorbers: AbsorberProbe, offset: int
              ) -> Callable[[], np.ndarray]:
     """The sample of ``integ``'s current state that a run records: time (s), the hub centre
@@ -701,10 +709,7 @@ def compile_kernels(steps: int = 3) -> None:
     """
     p = SPEC.validate({"bifilar": "equivalent"})
     model, *_ = build(p)
-    integ = make_integrator(System(model), "ep", 2 * np.pi / p.hub_speed / p.steps_per_rev,
-                            tol=NEWTON_TOL)
-    if p.composition != "none":
-        integ = Composed(integ, p.composition)
+    integ = time_integration(p, System(model))
     for _ in range(steps):
         integ.step()
 

@@ -37,10 +37,8 @@ from collections.abc import Callable
 import numpy as np
 import xarray as xr
 
-from solver.composition import Composed
 from solver.continuation import continue_branch
 from solver.floquet import multipliers
-from solver.integrators import make_integrator
 from solver.system import System
 from studies import hub
 from studies.absorbers import N_BIFILARS, AbsorberProbe, AbsorberStart
@@ -49,6 +47,7 @@ from studies.bifilar import pin_angle
 from studies.branches import BranchPoint, BranchResult, Continuation
 from studies.holes import MAX_TANGENT_ANGLE
 from studies.parameters import ParameterError, Parameters
+from studies.periodic import stepper
 from studies.reduced_hub import (
     HarmonicBalance,
     PeriodicSwing,
@@ -251,11 +250,8 @@ class QuarterMap:
         p = self.p
         model, hub_body, shaft, parts = hub.build(p, self.d, self.start(y))
         sysm = System(model)
-        integ = make_integrator(sysm, "ep", 2 * np.pi / p.hub_speed / p.steps_per_rev,
-                                tol=MAP_NEWTON_TOL)
-        if p.composition != "none":
-            integ = Composed(integ, p.composition)
-        return integ, sysm, hub_body, shaft, parts
+        return (hub.time_integration(p, sysm, tol=MAP_NEWTON_TOL), sysm, hub_body, shaft,
+                parts)
 
     def read(self, sysm: System, hub_body, shaft, parts, q: np.ndarray,
              v: np.ndarray) -> np.ndarray:
@@ -271,18 +267,44 @@ class QuarterMap:
 
     def __call__(self, y: np.ndarray) -> np.ndarray:
         integ, sysm, hub_body, shaft, parts = self.integrator(y)
+        step = stepper(integ, self.p.hub_speed)
         for _ in range(self.steps):
-            info = integ.step()
-            if not info.converged:
-                raise RuntimeError(f"time step failed at t = {integ.t:.6g} s: {info.message}")
+            step()
         self.spent["revolutions"] += 1 / N_BIFILARS
         self.spent["steps"] += self.steps
-        out = self.read(sysm, hub_body, shaft, parts, integ.q, integ.v)
-        n = N_BIFILARS
         # bifilar k's place a quarter revolution on is bifilar k + 1's at t = 0
-        out[4: 4 + n] = np.roll(out[4: 4 + n], 1)
-        out[4 + n:] = np.roll(out[4 + n:], 1)
-        return out
+        return _renumbered(self.read(sysm, hub_body, shaft, parts, integ.q, integ.v), 1)
+
+
+def _renumbered(y: np.ndarray, sectors: int) -> np.ndarray:
+    """Minimal coordinates read ``sectors`` sector periods after t = 0, with each bifilar's
+    angle and rate moved to the place its bifilar had at t = 0."""
+    n = N_BIFILARS
+    out = y.copy()
+    out[4: 4 + n] = np.roll(y[4: 4 + n], sectors)
+    out[4 + n:] = np.roll(y[4 + n:], sectors)
+    return out
+
+
+def _live(p: Parameters) -> np.ndarray:
+    """Which minimal coordinates the map has: all with free bifilars, the hub's alone with
+    locked ones."""
+    return np.arange(4 + 2 * N_BIFILARS) < (4 + 2 * N_BIFILARS if p.bifilar == "free" else 4)
+
+
+def _forward_columns(residual: Callable[[np.ndarray], np.ndarray], u: np.ndarray,
+                     f0: np.ndarray) -> np.ndarray:
+    """∂residual/∂u at u (where it is f0) by forward differences of :data:`SHOOTING_STEP`:
+    one quarter revolution a column."""
+    return np.column_stack([(residual(u + SHOOTING_STEP * e) - f0) / SHOOTING_STEP
+                            for e in np.eye(len(u))])
+
+
+def _revolution_multipliers(jac: np.ndarray) -> np.ndarray:
+    """The revolution's multipliers, largest modulus first, of the quarter map's Jacobian
+    minus the identity (``jac``): the N-th powers of the quarter map's eigenvalues."""
+    mult = multipliers(jac + np.eye(len(jac))) ** N_BIFILARS
+    return mult[np.argsort(-np.abs(mult))]
 
 
 def _scales(p: Parameters) -> np.ndarray:
@@ -296,20 +318,6 @@ def _scales(p: Parameters) -> np.ndarray:
     return s
 
 
-def quarter_map_jacobian(qm: QuarterMap, y: np.ndarray, scale: np.ndarray,
-                         live: np.ndarray) -> np.ndarray:
-    """∂(map − identity)/∂u of the quarter-revolution map at y in the scaled coordinates
-    u = y/scale (``live`` ones only), by forward differences of :data:`SHOOTING_STEP`."""
-    def residual(u: np.ndarray) -> np.ndarray:
-        z = y.copy()
-        z[live] = u * scale[live]
-        return (qm(z) - z)[live] / scale[live]
-    u0 = y[live] / scale[live]
-    f0 = residual(u0)
-    return np.column_stack([(residual(u0 + SHOOTING_STEP * e) - f0) / SHOOTING_STEP
-                            for e in np.eye(len(u0))])
-
-
 def run_multipliers(p: Parameters, integ, sysm: System, hub_body, shaft, parts
                     ) -> np.ndarray:
     """The revolution's Floquet multipliers of a run's periodic response from its integrator
@@ -317,17 +325,17 @@ def run_multipliers(p: Parameters, integ, sysm: System, hub_body, shaft, parts
     Jacobian (:class:`QuarterMap`) at the state read there, bifilars renumbered to the
     start's places. Largest modulus first."""
     qm = QuarterMap(p)
-    y = qm.read(sysm, hub_body, shaft, parts, integ.q, integ.v)
     sectors = round(integ.t * p.hub_speed * N_BIFILARS / (2 * np.pi))
-    n = N_BIFILARS
-    # at t = jT/N bifilar k sits where bifilar k + j started
-    y[4: 4 + n] = np.roll(y[4: 4 + n], sectors)
-    y[4 + n:] = np.roll(y[4 + n:], sectors)
-    scale = _scales(p)
-    live = np.ones(len(scale), dtype=bool) if p.bifilar == "free" else np.arange(len(scale)) < 4
-    jac = quarter_map_jacobian(qm, y, scale, live)
-    mult = multipliers(jac + np.eye(len(jac))) ** N_BIFILARS
-    return mult[np.argsort(-np.abs(mult))]
+    y = _renumbered(qm.read(sysm, hub_body, shaft, parts, integ.q, integ.v), sectors)
+    scale, live = _scales(p), _live(p)
+
+    def residual(u: np.ndarray) -> np.ndarray:
+        z = y.copy()
+        z[live] = u * scale[live]
+        return (qm(z) - z)[live] / scale[live]
+
+    u0 = y[live] / scale[live]
+    return _revolution_multipliers(_forward_columns(residual, u0, residual(u0)))
 
 
 def shooting_branch(p: Parameters, c: Continuation) -> list[BranchPoint]:
@@ -337,9 +345,7 @@ def shooting_branch(p: Parameters, c: Continuation) -> list[BranchPoint]:
     p0 = at(c.start)
     d0 = hub.design(p0)
     start, _ = hub.initial_start(p0, d0)
-    scale = _scales(p0)
-    free = p.bifilar == "free"
-    live = np.ones(len(scale), dtype=bool) if free else np.arange(len(scale)) < 4
+    scale, live = _scales(p0), _live(p)
     maps: dict[float, QuarterMap | None] = {}
     spent = {"revolutions": 0.0, "steps": 0}  # by every map of the branch
 
@@ -369,13 +375,13 @@ def shooting_branch(p: Parameters, c: Continuation) -> list[BranchPoint]:
     y0 = np.concatenate([start.center[:2], start.velocity[:2], start.angles, start.rates])
     u0 = y0[live] / scale[live]
     t0 = time.perf_counter()
+
     def jacobian(u: np.ndarray, value: float) -> tuple[np.ndarray, np.ndarray]:
         # forward differences: 1 + n + 1 quarter revolutions
         f0 = residual(u, value)
-        jx = np.column_stack([(residual(u + SHOOTING_STEP * e, value) - f0) / SHOOTING_STEP
-                              for e in np.eye(len(u))])
         dl = SHOOTING_STEP * max(abs(value), abs(c.stop - c.start))
-        return jx, (residual(u, value + dl) - f0) / dl
+        return (_forward_columns(lambda x: residual(x, value), u, f0),
+                (residual(u, value + dl) - f0) / dl)
 
     found = continue_branch(residual, u0, c.start, c.stop, jacobian=jacobian, step=c.step,
                             min_step=c.min_step, max_step=c.max_step,
@@ -386,12 +392,12 @@ def shooting_branch(p: Parameters, c: Continuation) -> list[BranchPoint]:
     for pt in found.points:
         q = at(pt.parameter)
         # the quarter-revolution monodromy in the scaled coordinates: J_x = M_s − I
-        mult = multipliers(pt.jacobian + np.eye(len(pt.x))) ** N_BIFILARS
-        mult = mult[np.argsort(-np.abs(mult))]
+        mult = _revolution_multipliers(pt.jacobian)
         qm = quarter(pt.parameter) or QuarterMap(q, spent)
-        rows = _record(qm, full(pt.x))
+        y = full(pt.x)
+        rows, end = _record(qm, y)
         facts = _facts(q, qm.d, iterations=pt.iterations,
-                       change=float(np.max(np.abs(residual(pt.x, pt.parameter)))),
+                       change=float(np.max(np.abs(end - y)[live] / scale[live])),
                        seconds=time.perf_counter() - t0, samples=q.steps_per_rev,
                        revolutions=spent["revolutions"], steps=int(spent["steps"]))
         points.append(BranchPoint(pt.parameter, _point_result(q.hub_speed, rows, facts),
@@ -399,15 +405,16 @@ def shooting_branch(p: Parameters, c: Continuation) -> list[BranchPoint]:
     return _noted(points, note)
 
 
-def _record(qm: QuarterMap, y: np.ndarray) -> np.ndarray:
+def _record(qm: QuarterMap, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """One revolution of the multibody model from the periodic state ``y``, sampled after
-    each step as :func:`studies.hub.simulate` samples it."""
+    each step as :func:`studies.hub.simulate` samples it, and the minimal coordinates at its
+    end (the bifilars back in their places: y again on a periodic response)."""
     integ, sysm, hub_body, shaft, parts = qm.integrator(y)
     sample = hub.recorder(integ, qm.d, AbsorberProbe(sysm, parts, hub_body), sysm.offset[shaft])
-    rows = []
+    step, rows = stepper(integ, qm.p.hub_speed), []
     for _ in range(qm.p.steps_per_rev):
-        integ.step()
+        step()
         rows.append(sample())
     qm.spent["revolutions"] += 1
     qm.spent["steps"] += qm.p.steps_per_rev
-    return np.array(rows)
+    return np.array(rows), qm.read(sysm, hub_body, shaft, parts, integ.q, integ.v)

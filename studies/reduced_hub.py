@@ -125,6 +125,14 @@ class PeriodicSwing:
         return e @ (self.hub * (1j * w) ** derivative)
 
 
+def swing_stiffness(holes: Holes, hub_speed: float) -> float:
+    """K (N·m): the swing equation's stiffness at the vertex, Ω² ρ_v (m_b (R0 + Rm) + m_p R0),
+    the scale of its residuals."""
+    g = holes.geometry
+    return hub_speed**2 * holes.rho_v * (g.tuning_mass * (g.arm_radius + g.cm_offset)
+                                         + g.pin_mass * g.arm_radius)
+
+
 def path_terms(holes: Holes, sigma: Array) -> tuple[NDArray[np.complex128], ...]:
     """Γ, Γ', Γ'' (m, complex: x + iy in the bifilar's hub frame) at ``sigma``; Γ'' by central
     differences of Γ' (:data:`DERIVATIVE_STEP`)."""
@@ -209,11 +217,9 @@ class HarmonicBalance:
                 raise ValueError(f"whirl {wj!r} rad/s must be a multiple of {n_sec}Ω below "
                                  f"{m // 2}Ω")
             self.tones[order % m] += fj
-        g = model.holes.geometry
         self.shift = m // n_sec
         self.psis = [omega * self.t + a for a in model.azimuths]
-        self.stiff = model.hub_speed**2 * model.holes.rho_v * (
-            g.tuning_mass * (g.arm_radius + g.cm_offset) + g.pin_mass * g.arm_radius)
+        self.stiff = swing_stiffness(model.holes, model.hub_speed)
 
     def unknowns(self, guess: Array) -> Array:
         """x of σ_0 given at the samples (``guess``, shape (samples,))."""
