@@ -997,8 +997,10 @@ def _kkt_identity(s: System, diag: Array, g: Array):
     return sp.bmat(blocks, format="csc")
 
 
-def project_velocities(s: System, q: Array, v: Array, t: float) -> Array:
-    """Closest v (weighted least squares) with G v + ∂C/∂t = 0 and A(q) v = 0."""
+def project_velocities(s: System, q: Array, v: Array, t: float,
+                       weights: Array | None = None) -> Array:
+    """Closest v (weighted least squares) with G v + ∂C/∂t = 0 and A(q) v = 0; ``weights``
+    (n,) > 0 replace the default ones (see below)."""
     if s.mh + s.mn == 0:
         return v.copy()
     g = s.jacobian_values(q, t)
@@ -1012,8 +1014,11 @@ def project_velocities(s: System, q: Array, v: Array, t: float) -> Array:
     big = sp.vstack(rows).tocsr()
     # body coordinates keep their given rates as far as the constraints allow; the massless
     # joint scalars (η, s) take whatever rates the constraints imply (tiny weight)
-    w = np.ones(s.n)
-    w[s.layout.algebraic] = 1e-8
+    if weights is None:
+        w = np.ones(s.n)
+        w[s.layout.algebraic] = 1e-8
+    else:
+        w = np.asarray(weights, dtype=float)
     mat = sp.bmat([[sp.diags(w), big.T], [big, None]], format="csc")
     lin = LinearSolver()
     msg = lin.factor(mat)

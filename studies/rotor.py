@@ -81,6 +81,7 @@ from solver.integrators import Integrator, make_integrator
 from solver.joints import Revolute, Rigid
 from solver.lifting_line import LiftingLine
 from solver.model import Model
+from solver.period_map import map_multipliers
 from solver.rotations import rotation_about
 from solver.section_wind import PeriodicWind
 from solver.sections import isotropic_section
@@ -115,20 +116,25 @@ Z = np.array([0.0, 0.0, 1.0])
 N_BLADES = 4
 FT = 0.3048  # m
 # Newton's tolerance on the updates of q, relative to q's scale (its largest coordinate, a
-# wake state of about 25 m/s), at NEWTON_STEPS steps per revolution: 2.5e-6 m or m/s a step.
-# Measured on the free case from rest over two revolutions against Newton solved to 1e-12: the
-# positions differ by 1.1e-5 m, 180 times less than the time step's own error (2.0e-3 m, 240
-# against 480 steps/rev); a settled revolution takes 2.8 instead of 4.7 iterations per step
-# (1e-10). Shooting reaches the same periodic response at 1e-6 too (Table 1 cases 1, 3, 4).
+# wake state of about 25 m/s): NEWTON_TOL, 2.5e-7 m or m/s a step, up to the steps per
+# revolution where the h³ law below (NEWTON_TOL_H3 at NEWTON_STEPS) falls beneath it.
+# Newton's error is a small forcing at every step, and what it keeps alive must stay below
+# the periodicity tolerance of the smallest vibratory loads a case reports: at 1e-7 the
+# propulsively trimmed rotor at 40 and 60 kt (4P loads a third of Table 1's) was never
+# periodic (its harmonics changing by 30–90 % a revolution for 80 revolutions, locked or
+# free), although its largest Floquet multiplier there is 0.83–0.92: at 1e-8 and 1e-9 both
+# speeds are periodic in 26–42 revolutions. Table 1's harmonics move by at most 0.2 % from
+# 1e-7 to 1e-8 and a case costs 8–15 % more (2.3 → 2.7 iterations a step).
 # Finer steps need it tighter: Newton's error per step adds up over the 1/h steps while the
 # scheme's error falls as h², so the ratio holds with a tolerance in h³ (newton_tolerance). At
 # 480 steps/rev 1e-7 left the free case's harmonics changing by 3 % after 80 revolutions;
 # 1.25e-8 (h³) and 1e-8 shoot to periodic, as 2.96e-8 does at 360.
-NEWTON_TOL = 1e-7
+NEWTON_TOL = 1e-8
+NEWTON_TOL_H3 = 1e-7
 NEWTON_STEPS = 240
 # The lifting lines' wake states (m/s) are judged on a tolerance this many times Newton's. The
 # loads see them beside the sections' velocities, whose Newton error is the positions' times
-# γ/(βh) (1.9e3 /s at 240 steps/rev, ρ∞ = 0.5): a wake state held to the positions' 2.9e-6
+# γ/(βh) (1.9e3 /s at 240 steps/rev, ρ∞ = 0.5): a wake state held to the positions' tolerance
 # would be held 1900 times tighter than the velocity it is added to, and Newton would iterate
 # for it: with kept factors the wake states' updates shrink by 0.05–0.1 per iteration, the
 # motion's faster. Measured on the free case, settled: 2.74 → 2.25 iterations per step and
@@ -140,6 +146,17 @@ NEWTON_STEPS = 240
 # (0.75/rev in the fixed frame) alive at 1–2 % of the response, and the locked case never
 # shoots to periodic at 360 or 480 steps/rev (it does in 13.5 and 14 revolutions without).
 WAKE_TOLERANCE = 30.0
+# The Floquet multipliers' Arnoldi (solver.period_map): at most FLOQUET_VECTORS Krylov
+# vectors, each a perturbed quarter revolution, until the largest Ritz value's residual is
+# within FLOQUET_ACCURACY of it (measured on Table 1's free case: 48 vectors, the multiplier
+# 0.9122 against 0.9121 with 64; at a residual of 1e-3, 44 vectors, it was 0.9103); the
+# perturbation in the scaled norm (m, and m/s over Ω: the rotor's map is linear to 1e-4 from
+# 1e-3 to 1e-6); Newton's tolerance of the perturbed revolutions (its noise is this times
+# q's scale, over the perturbation).
+FLOQUET_VECTORS = 64
+FLOQUET_ACCURACY = 3e-4
+FLOQUET_EPS = 1e-6
+FLOQUET_TOL = 1e-12
 
 # the nominal rotor speed, where the absorbers' hub_speed takes its default
 NOMINAL_SPEED: float = ABSORBERS["hub_speed"].default
@@ -212,6 +229,9 @@ PARAMETERS: dict[str, Param] = {
     "periodic_tolerance": Param(1e-2, "1", "max change of harmonics between successive "
                                 "revolutions, relative to the largest", minimum=0.0,
                                 exclusive_minimum=True, maximum=1.0),
+    "floquet": Param(True, "1", "compute the periodic response's dominant Floquet "
+                     "multipliers (floquet_multiplier_max): Arnoldi on the quarter-revolution "
+                     "map, FLOQUET_VECTORS perturbed quarter revolutions"),
     **periodic.PARAMETERS,
     # 12 iterates (20 measured on the free case: 15.75 instead of 17 revolutions, not taken:
     # it would move Table 1 within its periodicity tolerance for a gain of 7 %)
@@ -288,6 +308,10 @@ OUTPUTS: dict[str, Output] = {
     **trim.OUTPUTS,
     **periodic.RUN_OUTPUTS,
     "run_unknowns": Output("1", "unknowns of the multibody model", dims=()),
+    "floquet_multiplier_max": Output(
+        "1", "largest modulus of the periodic response's Floquet multipliers over one "
+        "revolution (above 1: unstable), by Arnoldi on the quarter-revolution map "
+        "(solver.period_map)", dims=(), optional=True),
     "run_wake_updates": Output("1", "updates of the prescribed wake (0 with Peters–He)",
                                dims=()),
     "run_wake_error_estimate": Output(
@@ -647,9 +671,10 @@ def vibratory_change(rows: np.ndarray, other: np.ndarray, steps_per_rev: int) ->
 
 
 def newton_tolerance(steps_per_rev: int) -> float:
-    """Newton's relative tolerance at ``steps_per_rev``: :data:`NEWTON_TOL` up to
-    :data:`NEWTON_STEPS`, then falling as h³ (see :data:`NEWTON_TOL`)."""
-    return NEWTON_TOL * min(1.0, (NEWTON_STEPS / steps_per_rev) ** 3)
+    """Newton's relative tolerance at ``steps_per_rev``: :data:`NEWTON_TOL`, or where it is
+    smaller :data:`NEWTON_TOL_H3` at :data:`NEWTON_STEPS` falling as h³ (see
+    :data:`NEWTON_TOL`)."""
+    return min(NEWTON_TOL, NEWTON_TOL_H3 * (NEWTON_STEPS / steps_per_rev) ** 3)
 
 
 def integrator(system: System, p: Parameters, h: float, parts: RotorParts | None = None,
@@ -849,6 +874,7 @@ def simulate(p: Parameters) -> xr.Dataset:
         ramp()
         transient += rec.transient + p.revolutions
         rec = periodic_response()
+    floquet, floquet_note = _multipliers(p, integ, system, parts)
     wake_error, wake_note = float("nan"), ""
     if wake is not None and p.wake_error_estimate:
         # the wake's truncation error of the vibratory loads: the periodic response again
@@ -914,6 +940,7 @@ def simulate(p: Parameters) -> xr.Dataset:
         "advance_ratio": np.float64(p.flight_speed / (omega * UH60A.radius)),
         "effective_fuselage_stiffness": np.float64(parts.fuselage_stiffness),
         "fuselage_damping": np.float64(parts.fuselage_damping),
+        **floquet,
         **({"run_wake_error_estimate": np.float64(wake_error)}
            if np.isfinite(wake_error) else {}),
         "run_wake_updates": np.int32(0 if wake is None else wake.updates),
@@ -934,11 +961,39 @@ def simulate(p: Parameters) -> xr.Dataset:
         "flapping_cosine": np.float64(flap.cos[1]),
         "flapping_sine": np.float64(flap.sin[1]),
     }
-    note = "; ".join(filter(None, [rec.note, wake_note]))
+    note = "; ".join(filter(None, [rec.note, floquet_note, wake_note]))
     if trimmer is not None:
         note = "; ".join(filter(None, [note, f"trimmed in {trimmer.updates} control updates"]))
     ds = SPEC.dataset({**series, **facts}, {"message": note})
     return ds
+
+
+def _multipliers(p: Parameters, integ, system: System, parts: RotorParts
+                 ) -> tuple[dict[str, np.float64], str]:
+    """The ``floquet_multiplier_max`` of the periodic response ``integ`` ends on (a whole
+    revolution), or none and why."""
+    if not p.floquet:
+        return {}, ""
+    omega = p.hub_speed
+    # a unit of velocity is Ω times one of position, a unit of the scheme's accelerations Ω²
+    # times: the Arnoldi vectors weigh a mode's position and rate alike
+    scales = tuple(omega ** min(i, 2) for i in range(
+        len([k for k in integ.STATE if k not in ("t", "lam", "nu")])))
+    t = time.perf_counter()
+    try:
+        mm = map_multipliers(integ, p.steps_per_rev // N_BLADES,
+                             symmetry=symmetry(system, parts), scales=scales,
+                             vectors=FLOQUET_VECTORS, eps=FLOQUET_EPS, tol=FLOQUET_TOL,
+                             accuracy=FLOQUET_ACCURACY)
+    except (RuntimeError, ValueError) as exc:
+        return {}, f"no Floquet multipliers: {exc}"
+    report(f"Floquet multipliers: largest {mm.largest:.4f} ({mm.evaluations} quarter "
+           f"revolutions, {time.perf_counter() - t:.1f} s)")
+    if not np.isfinite(mm.largest):
+        return {}, (f"no Floquet multipliers: the largest Ritz value {abs(mm.values[0]):.4f} "
+                    f"not converged in {FLOQUET_VECTORS} vectors (residual "
+                    f"{mm.residuals[0]:.1e})")
+    return {"floquet_multiplier_max": np.float64(mm.largest)}, ""
 
 
 def _spinning(system: System, parts: RotorParts) -> tuple[list[list[Any]], list[Any]]:
@@ -1008,6 +1063,6 @@ def _check(p: Parameters) -> None:
 SPEC = ModelSpec("rotor", PARAMETERS, simulate, _check,
                  description="four-bladed elastic UH-60 rotor with aerodynamics and four "
                              "bifilars on a fuselage-beam",
-                 outputs=OUTPUTS, version="6",
+                 outputs=OUTPUTS, version="7",
                  # the two parts take about as long to compile (curve joints / the rest)
                  warm_up=(partial(compile_bifilar, "galpha"), compile_kernels))

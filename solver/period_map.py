@@ -1,0 +1,313 @@
+"""Floquet multipliers of a periodic response found by time integration: Arnoldi iteration on
+the finite-difference Jacobian of the integrator's period (or sector) map.
+
+A periodic response x*(t) of a multibody model is asymptotically stable when every Floquet
+multiplier of its linearization lies inside the unit circle (:mod:`solver.floquet`). For a
+large model (a rotor: thousands of unknowns) the monodromy matrix is never formed; its
+dominant eigenvalues are found by Arnoldi iteration on its action, one perturbed integration
+per Krylov vector (Lust, Roose, Spence & Champneys 1998, "An adaptive Newton–Picard algorithm
+with subspace iteration for computing periodic solutions", SIAM J. Sci. Comput. 19; Seydel,
+*Practical Bifurcation and Stability Analysis*, ch. 7). Three things make that action a clean
+linear operator on a constrained model, and each is needed (without any of them the hub's
+largest multiplier came out between 0.96 and 10⁶ instead of 0.83):
+
+* **The scheme's whole state.** The map acts on everything a step starts from: positions,
+  velocities and the scheme's history (generalized-α's acceleration variables).
+* **Consistent perturbations.** Velocity perturbations are made consistent in the kinetic-
+  energy metric (a massless coordinate — a fictitious link, a joint's scalar — takes the rate
+  the constraints imply), as the difference of two projections: the base state keeps the
+  velocity component across the constraints that the scheme's own steps leave, only the
+  perturbation is made tangent. The map's outputs are projected the same way. A component
+  across the constraints is the scheme's own business (the energy-preserving step carries it
+  as an undamped two-step mode), not the motion's.
+* **The velocity relations' integrals held.** A velocity-level relation that is integrable
+  (a pin rolling without slip in a planar hole: the arc lengths, the pin's spin and the two
+  contact points are tied by integrals, not by the positions) has a constant of integration
+  for every row: perturbing it moves the model to a neighbouring family of motions (a pin
+  that slipped once), and the map has the multiplier 1 on each, whatever the stability. The
+  multipliers of the motion are those of the map on the invariant subspace where the
+  integrals keep their values: position perturbations are projected orthogonally onto
+  G δq = 0 and A δq = 0 (A the relations' rows), inputs and outputs alike.
+* **The pins' spin turned back.** On a periodic response each rolling pin returns to its
+  place but not to its spin angle; the map's outputs turn each pin's directors (and their
+  rates) about its own axis back to the input's spin (a symmetry of the motion), so that
+  outputs and inputs share one tangent space.
+
+Newton's tolerance sets the noise of the finite differences: a step solved to a relative
+tolerance τ leaves errors of τ times the state's scale, so the perturbed integrations are
+solved much tighter than a run's (``tol``), and the perturbation ``eps`` sits between that
+noise and the response's nonlinearity.
+
+With a cyclic symmetry of N sectors (:class:`solver.symmetry.CyclicSymmetry`) the map is one
+N-th of the period followed by the symmetry's turn-and-permute back; its eigenvalues to the
+N-th power are the period's multipliers, at an N-th of the cost per Krylov vector.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+from numpy.typing import NDArray
+
+from solver.curve_joints import Rolling
+from solver.integrators import project_positions, project_velocities
+
+Array = NDArray[np.float64]
+CArray = NDArray[np.complex128]
+
+
+def arnoldi(action, v0: Array, steps: int, *, min_steps: int | None = None,
+            tol: float = 0.0, ritz_vectors: bool = False
+            ) -> tuple[CArray, Array] | tuple[CArray, Array, CArray]:
+    """Ritz values of a linear map by Arnoldi iteration from ``v0``, with the residual
+    estimate of each (|h_{k+1,k}| |e_kᵀ y| for its unit eigenvector y of the Hessenberg
+    matrix: ‖A V y − μ V y‖ for the Ritz pair). Largest modulus first.
+
+    At most ``steps`` steps; from ``min_steps`` on (default ``steps``) it stops once the
+    largest Ritz value's residual, relative to its modulus, is within ``tol``, and on an
+    invariant subspace. Modified Gram–Schmidt with one reorthogonalization. With
+    ``ritz_vectors`` the Ritz vectors V y are returned too (columns, same order).
+    """
+    n = v0.size
+    basis = np.zeros((n, steps + 1))
+    hess = np.zeros((steps + 1, steps))
+    basis[:, 0] = v0 / np.linalg.norm(v0)
+    first = steps if min_steps is None else max(1, min(min_steps, steps))
+
+    def ritz(k: int) -> tuple[CArray, Array, CArray]:
+        vals, vecs = np.linalg.eig(hess[:k, :k])
+        res = np.abs(hess[k, k - 1] * vecs[-1, :])
+        order = np.argsort(-np.abs(vals), kind="stable")
+        return vals[order].astype(complex), res[order], vecs[:, order]
+
+    k = steps
+    for j in range(steps):
+        w = np.asarray(action(basis[:, j]), dtype=float)
+        for _ in range(2):  # twice is enough (Giraud et al. 2005)
+            c = basis[:, : j + 1].T @ w
+            w -= basis[:, : j + 1] @ c
+            hess[: j + 1, j] += c
+        hess[j + 1, j] = np.linalg.norm(w)
+        if hess[j + 1, j] <= 1e-14 * np.abs(hess[: j + 1, j]).max():
+            hess[j + 1, j] = 0.0
+            k = j + 1
+            break
+        basis[:, j + 1] = w / hess[j + 1, j]
+        if j + 1 >= first and j + 1 < steps:
+            vals, res, _ = ritz(j + 1)
+            if res[0] <= tol * abs(vals[0]):
+                k = j + 1
+                break
+    vals, res, vecs = ritz(k)
+    if ritz_vectors:
+        return vals, res, basis[:, :k] @ vecs
+    return vals, res
+
+
+def rolling_pins(system) -> NDArray[np.int64]:
+    """The offsets in q of the bodies that roll (:class:`solver.curve_joints.Rolling`'s pins),
+    each once."""
+    return np.array(sorted({system.offset[e.pin] for e in system.elements
+                            if isinstance(e, Rolling)}), dtype=np.int64)
+
+
+def spin_alignment(pins: NDArray[np.int64], before: Array, after: Array) -> Array:
+    """Per rolling pin (offsets ``pins``), the rotation R = D D'ᵀ that takes its triad D' in
+    the positions ``after`` back to its triad D in ``before``: on a periodic response the
+    pins return to their places but not to their spin angles, and turning each pin's directors
+    (and their rates) by R moves the map's output back onto the input's spin (a symmetry of
+    the motion, so that the input's cyclic directions are the output's). (k, 3, 3)."""
+    out = np.empty((pins.size, 3, 3))
+    for j, o in enumerate(pins):
+        d = before[o + 3 : o + 12].reshape(3, 3).T  # columns d1, d2, d3
+        d1 = after[o + 3 : o + 12].reshape(3, 3).T
+        out[j] = d @ d1.T
+    return out
+
+
+def turn_pins(pins: NDArray[np.int64], rot: Array, arrays: list[Array]) -> list[Array]:
+    """``arrays`` (positions, rates, …) with each pin's directors turned by its ``rot``."""
+    out = [np.copy(x) for x in arrays]
+    for o, r in zip(pins, rot, strict=True):
+        for x in out:
+            x[o + 3 : o + 12] = (x[o + 3 : o + 12].reshape(3, 3) @ r.T).ravel()
+    return out
+
+
+def position_tangent(system, q: Array, t: float):
+    """The orthogonal projection of position perturbations δq onto the tangent of the
+    holonomic constraints and of the integrals of the velocity-level relations at ``q``:
+    G δq = 0 and A δq = 0. Returns δq ↦ projected δq (one factorization, many solves)."""
+    n = system.n
+    g = system.jacobian_values(q, t)
+    rows = [sp.csr_matrix((g, (system.G_rows, system.G_cols)), shape=(system.mh, n))]
+    if system.mn:
+        a = system.nonholonomic_values(q)
+        rows.append(sp.csr_matrix((a, (system.A_rows - system.mh, system.A_cols)),
+                                  shape=(system.mn, n)))
+    j = sp.vstack(rows).tocsc()
+    m = j.shape[0]
+    if m == 0:
+        return lambda dq: np.array(dq, dtype=float)
+    lu = spla.splu(sp.bmat([[sp.identity(n), j.T], [j, None]], format="csc"))
+
+    def project(dq: Array) -> Array:
+        return lu.solve(np.concatenate([dq, np.zeros(m)]))[:n]
+    return project
+
+
+@dataclass
+class MapMultipliers:
+    """The dominant Floquet multipliers of a periodic response (:func:`map_multipliers`).
+
+    ``values`` the period's multipliers (the map's Ritz values to the N-th power), largest
+    modulus first; ``residuals`` each Ritz pair's residual estimate relative to the largest
+    Ritz value's modulus (within the ``accuracy`` asked: converged); ``evaluations`` the
+    perturbed integrations of the map spent; ``modes`` the Ritz vectors in the state's units:
+    ``modes[i, :, k]`` is the part in the i-th state array (q, v, then the scheme's history)
+    of the k-th multiplier's mode (its positions on the constraints' tangent)."""
+
+    values: CArray
+    residuals: Array
+    accuracy: float
+    evaluations: int
+    modes: CArray
+
+    @property
+    def largest(self) -> float:
+        """Modulus of the largest multiplier, NaN unless its Ritz value converged."""
+        ok = self.values.size and self.residuals[0] <= self.accuracy
+        return float(np.abs(self.values[0])) if ok else float("nan")
+
+
+def map_multipliers(integ, steps: int, *, symmetry=None, scales: tuple[float, ...] | None = None,
+                    vectors: int = 64, min_vectors: int = 24, eps: float = 1e-6,
+                    tol: float = 1e-12, accuracy: float = 1e-4, seed: int = 0
+                    ) -> MapMultipliers:
+    """Dominant Floquet multipliers of the periodic response ``integ`` is on.
+
+    Parameters
+    ----------
+    integ
+        An integrator at a state of the periodic response (at the start of a sector when
+        ``symmetry`` is given); its state is restored on return.
+    steps
+        Time steps of the map: a period, or one sector of it with ``symmetry``.
+    symmetry
+        :class:`solver.symmetry.CyclicSymmetry` or ``None``.
+    scales
+        The size of a unit of each state array (q, v, then the scheme's history, in
+        ``integ.STATE`` order): the inner product the Arnoldi vectors are orthonormal in and
+        the perturbation ``eps`` is measured in (default 1 for all; a rotor uses Ω for
+        velocities and Ω² for accelerations, so that a mode's position and rate weigh alike).
+    vectors, min_vectors
+        Most and fewest Arnoldi steps (perturbed integrations of the map).
+    eps
+        Size of each perturbation in the scaled norm: above Newton's noise (``tol`` times q's
+        scale) and below the response's nonlinearity. Generalized-α maps are linear from 1e-3
+        to 1e-7 on the rotor; the energy-conserving steps (ep, ed) carry a roundoff in their
+        discrete gradients that perturbations below about 1e-5 meet, so 1e-5–1e-4 there.
+    tol
+        Newton's relative tolerance during the perturbed integrations.
+    accuracy
+        Arnoldi stops once the largest Ritz value's residual estimate, relative to its
+        modulus, is within this; :attr:`MapMultipliers.largest` is NaN if it is not.
+    seed
+        Of the random start vector.
+    """
+    keys = ["q", "v", *[k for k in integ.STATE if k not in ("t", "q", "v", "lam", "nu")]]
+    system = integ.sys
+    n = system.n
+    base = integ.state()
+    t0 = base["t"]
+    w = np.ones(len(keys)) if scales is None else np.asarray(scales, dtype=float)
+    if w.size != len(keys):
+        raise ValueError(f"map_multipliers: {len(keys)} scales needed ({keys}), got {w.size}")
+    weight = np.repeat(w, n)  # state = weight * vector
+    saved_tol = integ.tol
+    count = 0
+    pins: NDArray[np.int64] = np.zeros(0, dtype=np.int64)
+    align: Array | None = None
+
+    def march(arrays: list[Array]) -> Array:
+        nonlocal count
+        state = dict(base)
+        state.update(zip(keys, arrays, strict=True))
+        integ.restore(state)
+        for _ in range(steps):
+            info = integ.step()
+            if not info.converged:
+                raise RuntimeError(f"Floquet multipliers: a perturbed step failed at t = "
+                                   f"{integ.t:.6g} s: {info.message}")
+        out = [np.copy(getattr(integ, k)) for k in keys]
+        if symmetry is not None:
+            out = list(symmetry.back(*out, k=1))
+        if align is not None:
+            out = turn_pins(pins, align, out)
+        # the velocities' component across the constraints is the scheme's own (its two-step
+        # mode): the map's state is the tangent part
+        out[1] = consistent(out[0], out[1])
+        count += 1
+        return np.concatenate(out) / weight
+
+    try:
+        integ.tol = tol
+        start = [np.copy(base[k]) for k in keys]
+        # the base state on the constraints as the perturbed ones will be (a run's Newton
+        # tolerance leaves them violated by more than the projection's: that offset, divided
+        # by eps, would swamp the differences)
+        start[0] = project_positions(system, start[0], t0)
+        # velocities made consistent in the kinetic-energy metric: a massless coordinate (a
+        # fictitious link, a joint's scalar) takes whatever rate the constraints imply, so the
+        # map acts on the motion of the masses (a massless coordinate's own rate is a state of
+        # the scheme only, undamped in an energy-preserving step)
+        mass = np.asarray(system.M.diagonal(), dtype=float)
+        metric = np.where(mass > 0, mass, 1e-8 * max(float(mass.max()), 1e-300))
+        metric[system.first_order] = 1.0
+
+        def consistent(q: Array, v: Array) -> Array:
+            return project_velocities(system, q, v, t0, metric)
+
+        v_base = consistent(start[0], start[1])
+        pins = rolling_pins(system)
+        align = None
+        x0 = march(start)
+        if pins.size:  # the pins' spin back to the input's, the same turn for every output
+            align = spin_alignment(pins, start[0], x0[:n] * weight[:n])
+            x0 = march(start)
+        tangent = position_tangent(system, start[0], t0)
+
+        def restrict(x: Array) -> Array:  # positions on the constraints' tangent
+            x = np.array(x)
+            x[:n] = tangent(x[:n] * weight[:n]) / weight[:n]
+            return x
+
+        def action(u: Array) -> Array:
+            d = restrict(u) * eps * weight
+            parts = [start[i] + d[i * n : (i + 1) * n] for i in range(len(keys))]
+            parts[0] = project_positions(system, parts[0], t0)
+            parts[1] = start[1] + (consistent(parts[0], parts[1]) - v_base)
+            return restrict((march(parts) - x0) / eps)
+
+        # the start: the map's change of the base state, the transient the run left, which
+        # holds the slowest modes (so that a few vectors find them), with a little of every
+        # direction so that none is missed
+        rng = np.random.default_rng(seed)
+        noise = restrict(rng.standard_normal(n * len(keys)))
+        change = restrict(x0 - np.concatenate(start) / weight)
+        size = np.linalg.norm(change)
+        u0 = noise / np.linalg.norm(noise) * 1e-3 + (change / size if size > 0 else 0.0)
+        vals, res, ritz = arnoldi(action, u0, vectors, min_steps=min_vectors, tol=accuracy,
+                                  ritz_vectors=True)
+    finally:
+        integ.tol = saved_tol
+        integ.restore(base)
+    sectors = 1 if symmetry is None else symmetry.n_sectors
+    rel = res / max(float(np.abs(vals).max()), 1e-300)
+    mult = vals**sectors
+    order = np.argsort(-np.abs(mult), kind="stable")
+    return MapMultipliers(mult[order], rel[order], accuracy, count,
+                          (ritz[:, order] * weight[:, None]).reshape(len(keys), n, -1))
