@@ -3,6 +3,7 @@
     PYTHONPATH=. python benchmarks/rotor.py --revolutions 2 [--bifilar free] [--scheme ed]
                                              [--inflow prescribed_wake] [--profile]
     PYTHONPATH=. python benchmarks/rotor.py --case [--bifilar free]     # one whole case
+    PYTHONPATH=. python benchmarks/rotor.py --case --no-floquet         # without its multipliers
     PYTHONPATH=. python benchmarks/rotor.py --case --trim wind_tunnel   # trimmed, and untrimmed
     PYTHONPATH=. python benchmarks/rotor.py --wake-update               # one wake update
 
@@ -11,7 +12,8 @@ The first form builds the model with its defaults (``--steps-per-rev`` to change
 revolution, steps per second and Newton iterations per step; ``--profile`` runs the loop under
 pyinstrument and prints the profile (the modules that take the time). The second runs one case
 as the sweep does (settling, marching until periodic, recording) and prints its wall time,
-revolutions and Newton iterations per step (and, with the prescribed wake, its updates); with
+revolutions and Newton iterations per step, its largest Floquet multiplier (``--no-floquet``:
+none, to time the case without them) and, with the prescribed wake, its updates; with
 ``--trim`` it runs the case trimmed and untrimmed and prints both, the trim's control updates,
 its residuals and the revolutions' ratio (``--coarse``: the coarse case of the tests, 120
 steps/rev, 3 elements, 3 settling revolutions, periodic to 5 %). The third times one update
@@ -67,6 +69,7 @@ def per_case(p: Parameters) -> dict:
     revs = ds["run_simulated_revolutions"].item()
     return {"bifilar": p.bifilar, "inflow": p.inflow, "trim": p.trim, "wall_s": round(wall, 1),
             "revolutions": revs, "wake_updates": int(ds["run_wake_updates"].item()),
+            "floquet_multiplier_max": round(float(ds.get("floquet_multiplier_max", np.nan)), 4),
             "seconds_per_rev": round(wall / revs, 2),
             "newton_per_step": round(
                 ds["run_newton_iterations"].item() / ds["run_steps"].item(), 2),
@@ -108,10 +111,12 @@ def main() -> None:
                    help="with --case: run it trimmed and untrimmed")
     a.add_argument("--coarse", action="store_true",
                    help="the coarse case of the tests (120 steps/rev, 3 elements)")
+    a.add_argument("--no-floquet", action="store_true",
+                   help="with --case: without the Floquet multipliers")
     a.add_argument("--wake-update", action="store_true",
                    help="time one update of the prescribed wake")
     args = a.parse_args()
-    given = {"bifilar": args.bifilar, "inflow": args.inflow}
+    given = {"bifilar": args.bifilar, "inflow": args.inflow, "floquet": not args.no_floquet}
     if args.steps_per_rev:
         given["steps_per_rev"] = args.steps_per_rev
     if args.scheme:

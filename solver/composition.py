@@ -108,15 +108,6 @@ class Composed:
         return self._inner.t
 
     @property
-    def tol(self) -> float:
-        """The wrapped step's Newton tolerance (set through to it)."""
-        return self._inner.tol
-
-    @tol.setter
-    def tol(self, value: float) -> None:
-        self._inner.tol = float(value)
-
-    @property
     def n_substeps(self) -> int:
         return self._inner.n_steps
 

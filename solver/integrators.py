@@ -32,6 +32,8 @@ h → 0 (Bottasso, Bauchau & Cardona 2007).
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any
 
@@ -282,6 +284,18 @@ class Integrator:
         for k in self.STATE:
             setattr(self, k, float(state[k]) if k == "t" else np.array(state[k], dtype=float))
         self._x_hist = ()
+
+    @contextmanager
+    def tightened(self, tol: float) -> Iterator[Integrator]:
+        """Newton's relative tolerance ``tol`` for every unknown alike (a per-unknown
+        ``tolerance_scale`` suspended) while the block runs: for finite differences of the
+        steps, whose noise is Newton's error over the perturbation."""
+        saved = self.tol, self._weights
+        self.tol, self._weights = float(tol), None
+        try:
+            yield self
+        finally:
+            self.tol, self._weights = saved
 
     def energy(self, q: Array | None = None, v: Array | None = None) -> float:
         q = self.q if q is None else q
