@@ -114,6 +114,12 @@ class Composed:
     def state(self) -> dict[str, Any]:
         return self._inner.state()
 
+    def forget_factors(self) -> None:
+        """Drop every substep size's kept Newton factors (see the wrapped integrator's)."""
+        for solver in self._solvers.values():
+            solver.lu = None
+        self._inner.forget_factors()
+
     def restore(self, state: dict[str, Any]) -> None:
         self._inner.restore(state)
         self._histories = [() for _ in self.gammas]

@@ -285,6 +285,16 @@ class Integrator:
             setattr(self, k, float(state[k]) if k == "t" else np.array(state[k], dtype=float))
         self._x_hist = ()
 
+    def forget_factors(self) -> None:
+        """Drop the kept Newton factors and the record of how well they paid: the next step
+        factors its own matrix, as a fresh integrator's first step does. Steps from one state
+        then follow the same Newton path whatever ran before (kept factors of another state
+        stop Newton at another point within its tolerance, or, at a stale matrix's slow
+        contraction, on an error estimate far from it)."""
+        self.lin.lu = None
+        self._stale_failures = self._skip_reuse = 0
+        self._retry = self.REUSE_RETRY
+
     @contextmanager
     def tightened(self, tol: float) -> Iterator[Integrator]:
         """Newton's relative tolerance ``tol`` for every unknown alike (a per-unknown

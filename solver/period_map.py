@@ -59,9 +59,9 @@ Array = NDArray[np.float64]
 CArray = NDArray[np.complex128]
 # The largest fresh residual of the largest Ritz pair that is the finite differences' own
 # error (their noise, Newton's tolerance over the perturbation, and the projections' second
-# order in it): measured 2.3e-4 on the trimmed rotor at 120 kt, 9e-4–1.2e-3 on the rolling
-# disc at a perturbation of 1e-4; beyond it the map is not the linear operator Arnoldi
-# assumed (3e-2 to 0.4 where a looser tolerance on the rotor's wake states let their noise in).
+# order in it): measured 1.7e-4–3.1e-4 on the trimmed rotor at 120 kt, 9e-4–1.2e-3 on the
+# rolling disc at a perturbation of 1e-4; beyond it the map is not the linear operator
+# Arnoldi assumed (3e-2 to 0.55 where the marches followed different Newton paths).
 FRESH_LIMIT = 1e-2
 
 
@@ -225,8 +225,7 @@ def map_multipliers(integ, steps: int, *, symmetry=None, scales: tuple[float, ..
     tol
         Newton's relative tolerance during the perturbed integrations, well above its
         roundoff floor: there Newton accepts an iteration that stagnates, and that noise over
-        ``eps`` swamps the differences (1e-12 on the rotor at 120 kt gave multipliers up to
-        22 for a periodic response that marching reaches; 1e-10 gives 0.909).
+        ``eps`` swamps the differences.
     accuracy
         Arnoldi stops once the largest Ritz value's residual estimate, relative to its
         modulus, is within this; :attr:`MapMultipliers.largest` is NaN if it is not.
@@ -239,8 +238,7 @@ def map_multipliers(integ, steps: int, *, symmetry=None, scales: tuple[float, ..
         raise ValueError(f"map_multipliers: {len(keys)} scales needed ({keys}), got {w.size}")
     base = integ.state()
     # every unknown to the one tolerance: a looser one on some (a rotor's wake states) lets
-    # their Newton error over the perturbation swamp the differences (at 30 times the
-    # tolerance, a fresh residual of 0.42 and a multiplier of 175 for a response of 0.905)
+    # their Newton error over the perturbation into the differences
     with integ.tightened(tol):
         try:
             return _arnoldi_on_map(integ, steps, keys, np.repeat(w, integ.sys.n), symmetry,
@@ -277,6 +275,7 @@ def _arnoldi_on_map(integ, steps: int, keys: list[str], weight: Array, symmetry,
         state = dict(base)
         state.update(zip(keys, arrays, strict=True))
         integ.restore(state)
+        integ.forget_factors()  # every march on one Newton path
         for _ in range(steps):
             info = integ.step()
             if not info.converged:
