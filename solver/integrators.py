@@ -298,14 +298,16 @@ class Integrator:
     @contextmanager
     def tightened(self, tol: float) -> Iterator[Integrator]:
         """Newton's relative tolerance ``tol`` for every unknown alike (a per-unknown
-        ``tolerance_scale`` suspended) while the block runs: for finite differences of the
-        steps, whose noise is Newton's error over the perturbation."""
-        saved = self.tol, self._weights
-        self.tol, self._weights = float(tol), None
+        ``tolerance_scale`` suspended), confirmed by an update (never stopped on the error
+        its contraction rate predicts, which a stale matrix's erratic rate can put far from
+        the tolerance) while the block runs: for finite differences of the steps, whose noise
+        is Newton's error over the perturbation."""
+        saved = self.tol, self._weights, self._confirm
+        self.tol, self._weights, self._confirm = float(tol), None, True
         try:
             yield self
         finally:
-            self.tol, self._weights = saved
+            self.tol, self._weights, self._confirm = saved
 
     def energy(self, q: Array | None = None, v: Array | None = None) -> float:
         q = self.q if q is None else q
@@ -321,6 +323,7 @@ class Integrator:
         return max_abs_weighted(dx, self._weights, self._nk // self.sys.n)
 
     _full = False
+    _confirm = False  # Newton confirms convergence by an update, never on its estimate
     _stale_failures = 0
     _skip_reuse = 0
     # steps after which reusing factors is tried again once it stopped paying, doubled after
@@ -393,7 +396,8 @@ class Integrator:
             self.lin.stages = self._nk // self.sys.n
         res = newton(self._residual, self._jacobian, x0, self._error, self.tol * self.scale,
                      self.lin, self._reuse_now(), full=self._full,
-                     estimate=self.tol >= ESTIMATE_TOL, stale_rate=self.stale_rate,
+                     estimate=self.tol >= ESTIMATE_TOL and not self._confirm,
+                     stale_rate=self.stale_rate,
                      stale_iterations=self.stale_iterations)
         self._reuse_outcome(res)
         if not res.converged:
