@@ -1,8 +1,9 @@
 """The rotor's largest Floquet multiplier (:func:`solver.period_map.map_multipliers` on its
 quarter-revolution map) against the decay of its mode marched in time: the run's own
-integrator, perturbed along the mode and stepped for four revolutions beside the unperturbed
+integrator, perturbed along the mode and stepped for eight revolutions beside the unperturbed
 response, the difference of the hub's fixed-frame motion sampled each quarter revolution and
-fitted by a damped oscillation (two-term recurrence)."""
+fitted by two damped oscillations (Prony: a four-term linear recurrence, the neighbouring
+modes at 0.88 being too close to leave out)."""
 
 from __future__ import annotations
 
@@ -15,13 +16,14 @@ from solver.integrators import project_positions, project_velocities
 pytestmark = pytest.mark.slow
 
 
-def _recurrence_roots(x: np.ndarray) -> np.ndarray:
-    """Roots of the two-term recurrence x_{k+2} = a x_{k+1} + b x_k fitted (least squares) to
-    the columns of ``x`` (samples along axis 0)."""
-    rows = np.concatenate([np.column_stack([x[1:-1, j], x[:-2, j]]) for j in range(x.shape[1])])
-    rhs = np.concatenate([x[2:, j] for j in range(x.shape[1])])
-    (a, b), *_ = np.linalg.lstsq(rows, rhs, rcond=None)
-    return np.roots([1.0, -a, -b])
+def _recurrence_roots(x: np.ndarray, order: int) -> np.ndarray:
+    """Roots of the linear recurrence x_{k+m} = Σ_j a_j x_{k+j} (m = ``order``) fitted by
+    least squares to the columns of ``x`` (samples along axis 0)."""
+    rows = np.concatenate([np.column_stack([x[j : len(x) - order + j, c] for j in range(order)])
+                           for c in range(x.shape[1])])
+    rhs = np.concatenate([x[order:, c] for c in range(x.shape[1])])
+    a, *_ = np.linalg.lstsq(rows, rhs, rcond=None)
+    return np.roots(np.concatenate([[1.0], -a[::-1]]))
 
 
 def test_largest_multiplier_is_the_decay_of_its_mode(monkeypatch):
@@ -48,12 +50,13 @@ def test_largest_multiplier_is_the_decay_of_its_mode(monkeypatch):
 
     def hub_motion(state: dict) -> np.ndarray:
         integ.restore(state)
-        integ.tol = 1e-12
+        integ.forget_factors()
         out = []
-        for _ in range(16):  # four revolutions, a sample each quarter
-            for _ in range(steps):
-                assert integ.step().converged
-            out.append(integ.q[shaft : shaft + 2].copy())
+        with integ.tightened(1e-10):
+            for _ in range(32):  # eight revolutions, a sample each quarter
+                for _ in range(steps):
+                    assert integ.step().converged
+                out.append(integ.q[shaft : shaft + 2].copy())
         return np.array(out)
 
     q = project_positions(system, base["q"], t0)
@@ -66,8 +69,10 @@ def test_largest_multiplier_is_the_decay_of_its_mode(monkeypatch):
     for i, key in enumerate(keys[2:], start=2):
         pushed[key] = base[key] + eps * mode[i]
     diff = hub_motion(pushed) - hub_motion(plain)
-    roots = _recurrence_roots(diff / np.abs(diff).max())
+    roots = _recurrence_roots(diff / np.abs(diff).max(), 4)
     decay = float(np.abs(roots).max()) ** 4  # per revolution
-    # measured: Arnoldi 0.9120, the marched mode 0.9118
-    assert decay == pytest.approx(found.largest, abs=2e-3)
+    # measured: Arnoldi 0.91197, the marched mode 0.91199 (the other pair fitted, 0.751, is
+    # what the four-term fit makes of the rest); with a two-term fit over four revolutions the
+    # neighbouring modes at 0.88 bias it to 0.9146
+    assert decay == pytest.approx(found.largest, abs=1e-3)
     assert 0.8 < found.largest < 0.95  # the lag-regressive/fuselage mode, about 2 % damped

@@ -544,7 +544,8 @@ def test_trimmed_rotor_at_low_speed_is_periodic_and_stable():
     its periodic response: at a Newton tolerance of 1e-7 its harmonics kept changing by 30–90 %
     a revolution for 80 revolutions, Newton's error feeding loads a third of Table 1's. Its
     largest Floquet multiplier (the lag-regressive/fuselage mode) is well inside the unit
-    circle. Measured: periodic in 26.5 revolutions after settling, multiplier 0.912."""
+    circle. Measured: periodic in 33.25 revolutions (10 of them settling), multiplier
+    0.9121."""
     ds = rotor.run({"trim": "propulsive", "flight_speed": 40 * 1852 / 3600,
                     "bifilar": "locked", "settle_revolutions": 10})
     assert float(ds.run_periodicity_change) <= 1e-2
