@@ -55,7 +55,9 @@ delayed feedback over one revolution (:func:`lag_feedback_gains`, damping ratio
 Besides the loads, each case archives the controls flown, the shaft power (the drive's
 moment about the shaft axis, mean × Ω), blade 0's flap angle and its first harmonics, and the
 in-plane hub moments at the fuselage-beam's top (:data:`OUTPUTS`). With ``trim`` the controls
-are found with the periodic response (:mod:`studies.trim`).
+are found with the periodic response (:mod:`studies.trim`). With ``floquet`` the periodic
+response's largest Floquet multiplier is found by Arnoldi on the quarter-revolution map
+(:func:`solver.period_map.map_multipliers`).
 
 ``docs/models.md`` gives the assumptions, the defaults and the measured accuracy.
 """
