@@ -124,7 +124,7 @@ FT = 0.3048  # m
 # the periodicity tolerance of the smallest vibratory loads a case reports: at 1e-7 the
 # propulsively trimmed rotor at 40 and 60 kt (4P loads a third of Table 1's) was never
 # periodic (its harmonics changing by 30–90 % a revolution for 80 revolutions, locked or
-# free), although its largest Floquet multiplier there is 0.83–0.92: at 1e-8 and 1e-9 both
+# free), although its largest Floquet multiplier there is 0.91–0.92: at 1e-8 and 1e-9 both
 # speeds are periodic in 26–42 revolutions. Table 1's harmonics move by at most 0.2 % from
 # 1e-7 to 1e-8 and a case costs 8–15 % more (2.3 → 2.7 iterations a step).
 # Finer steps need it tighter: Newton's error per step adds up over the 1/h steps while the
@@ -233,9 +233,10 @@ PARAMETERS: dict[str, Param] = {
     "periodic_tolerance": Param(1e-2, "1", "max change of harmonics between successive "
                                 "revolutions, relative to the largest", minimum=0.0,
                                 exclusive_minimum=True, maximum=1.0),
-    "floquet": Param(True, "1", "compute the periodic response's dominant Floquet "
-                     "multipliers (floquet_multiplier_max): Arnoldi on the quarter-revolution "
-                     "map, FLOQUET_VECTORS perturbed quarter revolutions"),
+    "floquet": Param(True, "1", "compute the periodic response's largest Floquet "
+                     "multiplier (floquet_multiplier_max): Arnoldi on the quarter-revolution "
+                     "map, 25-64 perturbed quarter revolutions (6-16 s a case); with the "
+                     "prescribed wake, in the converged wake held fixed"),
     **periodic.PARAMETERS,
     # 12 iterates (20 measured on the free case: 15.75 instead of 17 revolutions, not taken:
     # it would move Table 1 within its periodicity tolerance for a gain of 7 %)
