@@ -52,6 +52,7 @@ from solver.forces import AppliedLoad, Spring
 from solver.integrators import make_integrator
 from solver.joints import Orientation, Planar, Revolute
 from solver.model import Model
+from solver.period_map import map_multipliers
 from solver.symmetry import CyclicSymmetry
 from solver.system import System
 from solver.timefunctions import linear
@@ -139,7 +140,7 @@ PARAMETERS: dict[str, Param] = {
                          "a guess near either reaches that one", minimum=0.0, maximum=70.0),
     "floquet": Param(True, "1", "compute the periodic response's Floquet multipliers "
                      "(floquet_multiplier_max; 13 quarter revolutions of the multibody model "
-                     "at the recorded step; not for the equivalent)"),
+                     "at the recorded step, the equivalent's by Arnoldi on its whole state)"),
     "steps_per_rev": Param(40, "1", "time steps per revolution (each of them `composition`'s "
                            "substeps)", minimum=20, maximum=20000),
     "composition": Param("suzuki", "1", "symmetric composition of the ep step into a "
@@ -191,7 +192,8 @@ OUTPUTS: dict[str, Output] = {
     "floquet_multiplier_max": Output(
         "1", "largest modulus of the periodic response's Floquet multipliers over one "
         "revolution (above 1: unstable), from the multibody quarter-revolution map's Jacobian "
-        "in minimal coordinates (studies.hub_branches)", dims=(), optional=True),
+        "in minimal coordinates (studies.hub_branches), the equivalent's by Arnoldi on the "
+        "whole state (solver.period_map)", dims=(), optional=True),
 }
 
 
@@ -568,6 +570,17 @@ def simulate(p: Parameters) -> xr.Dataset:
             notes.append(f"no Floquet multipliers: {exc}")
         else:
             floquet["floquet_multiplier_max"] = np.float64(np.abs(mult[0]))
+    elif p.floquet and sym is not None:
+        # the equivalent has no pins to read minimal coordinates from: Arnoldi on the whole
+        # state's quarter map (the energy-conserving step's discrete gradients want a
+        # perturbation of 1e-5 or more: solver.period_map)
+        mm = map_multipliers(integ, nrev // N_BIFILARS, symmetry=sym,
+                             scales=(1.0, omega), eps=1e-5)
+        if np.isfinite(mm.largest):
+            floquet["floquet_multiplier_max"] = np.float64(mm.largest)
+        else:
+            notes.append(f"no Floquet multipliers: the largest Ritz value "
+                         f"{abs(mm.values[0]):.4f} did not converge")
     step_error = float("nan")
     n_c = periodic.coarser_steps(nrev, n_sec, N_MAX)
     extrapolated = False
@@ -727,5 +740,5 @@ def _branch(p: Parameters, c: Any) -> list:
 
 SPEC = ModelSpec("hub", PARAMETERS, simulate, _check,
                  description="four-bladed hub with four bifilars on a fuselage restraint",
-                 outputs=OUTPUTS, version="3", warm_up=(compile_bifilar, compile_kernels),
+                 outputs=OUTPUTS, version="4", warm_up=(compile_bifilar, compile_kernels),
                  branch=_branch)

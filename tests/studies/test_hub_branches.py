@@ -27,6 +27,7 @@ from solver.system import System
 from studies import hub
 from studies.backbones import backbone, order_by_quadrature
 from studies.branches import continuation_settings
+from studies.equivalent import equivalent_absorber
 from studies.hub_branches import BALANCE_HARMONICS, BALANCE_SAMPLES, balance_branch, branch
 from studies.reduced_hub import (
     HarmonicBalance,
@@ -218,3 +219,28 @@ def test_full_state_multipliers_of_the_free_hub_are_those_of_the_exact_equations
     assert found.largest == pytest.approx(abs(exact[0]), abs=3e-4)
     assert np.sort(np.abs(found.values[:6])) == pytest.approx(np.sort(np.abs(exact[:6])),
                                                              abs=3e-4)
+
+
+@pytest.mark.parametrize("steps", [40, 160])
+def test_equivalent_hub_multipliers_are_its_whirl_roots(steps):
+    # the hub with the linear fixed-frame equivalent is time-invariant: its free whirls
+    # z = e^{iωt} solve Δ(ω) = D K0 − ½ N B² ω⁴ = 0 (studies.hub.linear_response's
+    # denominator with the swing's coupling), and over a revolution they grow by e^{iωT}
+    p = hub.SPEC.validate({"bifilar": "equivalent", "steps_per_rev": steps,
+                           **({} if steps == 40 else {"composition": "none"})})
+    d = hub.design(p)
+    a = equivalent_absorber(d.holes, hub.N_BIFILARS, d.pin_damping)
+    om = p.hub_speed
+    mass = p.shaft_mass + p.rotor_mass + a.total_mass
+    k0 = np.poly1d([-mass, 1j * d.fuselage_damping, d.fuselage_stiffness])
+    rel = np.poly1d([1.0, -om])
+    den = a.inertia * ((a.order * om) ** 2 - rel * rel) + 1j * a.swing_damping * rel
+    quartic = den * k0 - 0.5 * a.n_absorbers * a.coupling**2 * np.poly1d([1, 0, 0, 0, 0])
+    mu = np.exp(1j * quartic.roots * 2 * np.pi / om)
+    exact = np.sort(np.abs(mu))[::-1]
+    ds = hub.run(p)
+    # measured against 0.829854 (the absorber's 4.27P progressive whirl): 0.829861 at the
+    # default 40 composed (fourth-order) steps a revolution, 0.830090 at 160 plain ep ones
+    # (second order)
+    assert float(ds.floquet_multiplier_max) == pytest.approx(exact[0],
+                                                             abs=2e-5 if steps == 40 else 3e-4)
