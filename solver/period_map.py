@@ -212,7 +212,7 @@ def map_multipliers(integ, steps: int, *, symmetry=None, scales: tuple[float, ..
     ----------
     integ
         An integrator at a state of the periodic response (at the start of a sector when
-        ``symmetry`` is given); its state is restored on return.
+        ``symmetry`` is given); its state and its step counts are restored on return.
     steps
         Time steps of the map: a period, or one sector of it with ``symmetry``.
     symmetry
@@ -244,6 +244,10 @@ def map_multipliers(integ, steps: int, *, symmetry=None, scales: tuple[float, ..
     if w.size != len(keys):
         raise ValueError(f"map_multipliers: {len(keys)} scales needed ({keys}), got {w.size}")
     base = integ.state()
+    # the run's own counts: the perturbed integrations are not its steps
+    counters = [(obj, name, getattr(obj, name)) for obj in {id(integ): integ, id(
+        getattr(integ, "_inner", integ)): getattr(integ, "_inner", integ)}.values()
+        for name in ("n_steps", "n_iterations", "n_factorizations") if name in vars(obj)]
     # every unknown to the one tolerance: a looser one on some (a rotor's wake states) lets
     # their Newton error over the perturbation into the differences
     with integ.tightened(tol):
@@ -252,6 +256,8 @@ def map_multipliers(integ, steps: int, *, symmetry=None, scales: tuple[float, ..
                                    vectors, min_vectors, eps, accuracy, seed)
         finally:
             integ.restore(base)
+            for obj, name, value in counters:
+                setattr(obj, name, value)
 
 
 def _arnoldi_on_map(integ, steps: int, keys: list[str], weight: Array, symmetry,

@@ -317,6 +317,9 @@ OUTPUTS: dict[str, Output] = {
         "1", "largest modulus of the periodic response's Floquet multipliers over one "
         "revolution (above 1: unstable), by Arnoldi on the quarter-revolution map "
         "(solver.period_map)", dims=(), optional=True),
+    "run_floquet_revolutions": Output(
+        "1", "revolutions simulated by the Floquet multipliers' perturbed quarter revolutions "
+        "(not in run_simulated_revolutions)", dims=(), optional=True),
     "run_wake_updates": Output("1", "updates of the prescribed wake (0 with Peters–He)",
                                dims=()),
     "run_wake_error_estimate": Output(
@@ -1000,7 +1003,8 @@ def _multipliers(p: Parameters, integ, system: System, parts: RotorParts
                     f"not converged in {FLOQUET_VECTORS} vectors (residual "
                     f"{mm.residuals[0]:.1e}, on a fresh application of the map "
                     f"{mm.fresh_residual:.1e})")
-    return {"floquet_multiplier_max": np.float64(mm.largest)}, ""
+    return {"floquet_multiplier_max": np.float64(mm.largest),
+            "run_floquet_revolutions": np.float64(mm.evaluations / N_BLADES)}, ""
 
 
 def _spinning(system: System, parts: RotorParts) -> tuple[list[list[Any]], list[Any]]:
