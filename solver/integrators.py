@@ -1025,21 +1025,25 @@ def _kkt_identity(s: System, diag: Array, g: Array):
     return sp.bmat(blocks, format="csc")
 
 
+def constraint_rows(s: System, q: Array, t: float) -> sp.csr_matrix:
+    """[G; A] at (q, t): the holonomic constraints' Jacobian over the velocity-level
+    relations' rows, (mh + mn) × n."""
+    g = s.jacobian_values(q, t)
+    rows = [sp.csr_matrix((g, (s.G_rows, s.G_cols)), shape=(s.mh, s.n))]
+    if s.mn:
+        a = s.nonholonomic_values(q)
+        rows.append(sp.csr_matrix((a, (s.A_rows - s.mh, s.A_cols)), shape=(s.mn, s.n)))
+    return sp.vstack(rows).tocsr()
+
+
 def project_velocities(s: System, q: Array, v: Array, t: float,
                        weights: Array | None = None) -> Array:
     """Closest v (weighted least squares) with G v + ∂C/∂t = 0 and A(q) v = 0; ``weights``
     (n,) > 0 replace the default ones (see below)."""
     if s.mh + s.mn == 0:
         return v.copy()
-    g = s.jacobian_values(q, t)
-    gm = sp.csr_matrix((g, (s.G_rows, s.G_cols)), shape=(s.mh, s.n))
-    rows = [gm]
-    rhs = [-s.constraint_rate(q, t)]
-    if s.mn:
-        a = s.nonholonomic_values(q)
-        rows.append(sp.csr_matrix((a, (s.A_rows - s.mh, s.A_cols)), shape=(s.mn, s.n)))
-        rhs.append(np.zeros(s.mn))
-    big = sp.vstack(rows).tocsr()
+    big = constraint_rows(s, q, t)
+    rhs = np.concatenate([-s.constraint_rate(q, t), np.zeros(s.mn)])
     # body coordinates keep their given rates as far as the constraints allow; the massless
     # joint scalars (η, s) take whatever rates the constraints imply (tiny weight)
     if weights is None:
@@ -1052,7 +1056,7 @@ def project_velocities(s: System, q: Array, v: Array, t: float,
     msg = lin.factor(mat)
     if msg:
         raise ValueError(f"cannot project the initial velocities: {msg}")
-    sol = lin.lu.solve(np.concatenate([w * v, np.concatenate(rhs)]))
+    sol = lin.lu.solve(np.concatenate([w * v, rhs]))
     return sol[: s.n]
 
 

@@ -60,7 +60,7 @@ import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
 
 from solver.curve_joints import Rolling
-from solver.integrators import project_positions, project_velocities
+from solver.integrators import constraint_rows, project_positions, project_velocities
 
 Array = NDArray[np.float64]
 CArray = NDArray[np.complex128]
@@ -155,13 +155,7 @@ def position_tangent(system, q: Array, t: float):
     holonomic constraints and of the integrals of the velocity-level relations at ``q``:
     G δq = 0 and A δq = 0. Returns δq ↦ projected δq (one factorization, many solves)."""
     n = system.n
-    g = system.jacobian_values(q, t)
-    rows = [sp.csr_matrix((g, (system.G_rows, system.G_cols)), shape=(system.mh, n))]
-    if system.mn:
-        a = system.nonholonomic_values(q)
-        rows.append(sp.csr_matrix((a, (system.A_rows - system.mh, system.A_cols)),
-                                  shape=(system.mn, n)))
-    j = sp.vstack(rows).tocsc()
+    j = constraint_rows(system, q, t).tocsc()
     m = j.shape[0]
     if m == 0:
         return lambda dq: np.array(dq, dtype=float)
@@ -194,6 +188,15 @@ class MapMultipliers:
     fresh_residual: float = 0.0
 
     @property
+    def failure(self) -> str:
+        """Why :attr:`largest` is NaN ("" if it is not), for a case message."""
+        if np.isfinite(self.largest):
+            return ""
+        return (f"no Floquet multipliers: the largest Ritz value {abs(self.values[0]):.4f} "
+                f"not converged (residual {self.residuals[0]:.1e}, on a fresh application "
+                f"of the map {self.fresh_residual:.1e})")
+
+    @property
     def largest(self) -> float:
         """Modulus of the largest multiplier, NaN unless its Ritz value converged and a fresh
         application of the map confirms it (within :data:`FRESH_LIMIT`)."""
@@ -202,7 +205,7 @@ class MapMultipliers:
         return float(np.abs(self.values[0])) if ok else float("nan")
 
 
-def map_multipliers(integ, steps: int, *, symmetry=None, scales: tuple[float, ...] | None = None,
+def map_multipliers(integ, steps: int, *, symmetry=None, rate: float = 1.0,
                     vectors: int = 64, min_vectors: int = 24, eps: float = 1e-5,
                     tol: float = 1e-10, accuracy: float = 1e-4, seed: int = 0
                     ) -> MapMultipliers:
@@ -217,11 +220,11 @@ def map_multipliers(integ, steps: int, *, symmetry=None, scales: tuple[float, ..
         Time steps of the map: a period, or one sector of it with ``symmetry``.
     symmetry
         :class:`solver.symmetry.CyclicSymmetry` or ``None``.
-    scales
-        The size of a unit of each state array (q, v, then the scheme's history, in
-        ``integ.STATE`` order): the inner product the Arnoldi vectors are orthonormal in and
-        the perturbation ``eps`` is measured in (default 1 for all; a rotor uses Ω for
-        velocities and Ω² for accelerations, so that a mode's position and rate weigh alike).
+    rate
+        The motion's frequency unit (rad/s, e.g. the rotor speed): a unit of velocity is
+        ``rate`` times one of position and a unit of the scheme's accelerations ``rate``²
+        times, so that the Arnoldi vectors, orthonormal in that norm, and the perturbation
+        ``eps`` measured in it weigh a mode's position and rates alike.
     vectors, min_vectors
         Most and fewest Arnoldi steps (perturbed integrations of the map).
     eps
@@ -240,14 +243,15 @@ def map_multipliers(integ, steps: int, *, symmetry=None, scales: tuple[float, ..
         Of the random start vector.
     """
     keys = ["q", "v", *[k for k in integ.STATE if k not in ("t", "q", "v", "lam", "nu")]]
-    w = np.ones(len(keys)) if scales is None else np.asarray(scales, dtype=float)
-    if w.size != len(keys):
-        raise ValueError(f"map_multipliers: {len(keys)} scales needed ({keys}), got {w.size}")
+    if not (np.isfinite(rate) and rate > 0):
+        raise ValueError(f"map_multipliers: rate = {rate!r} must be finite and > 0")
+    w = np.array([rate ** min(i, 2) for i in range(len(keys))])
     base = integ.state()
     # the run's own counts: the perturbed integrations are not its steps
-    counters = [(obj, name, getattr(obj, name)) for obj in {id(integ): integ, id(
-        getattr(integ, "_inner", integ)): getattr(integ, "_inner", integ)}.values()
-        for name in ("n_steps", "n_iterations", "n_factorizations") if name in vars(obj)]
+    # (a composed step keeps its own step count beside its wrapped step's)
+    owners = [integ, *([integ._inner] if hasattr(integ, "_inner") else [])]
+    counters = [(obj, name, getattr(obj, name)) for obj in owners
+                for name in ("n_steps", "n_iterations", "n_factorizations") if name in vars(obj)]
     # every unknown to the one tolerance: a looser one on some (a rotor's wake states) lets
     # their Newton error over the perturbation into the differences
     with integ.tightened(tol):
@@ -283,7 +287,7 @@ def _arnoldi_on_map(integ, steps: int, keys: list[str], weight: Array, symmetry,
     def consistent(q: Array, v: Array) -> Array:
         return project_velocities(system, q, v, t0, metric)
 
-    def march(arrays: list[Array]) -> Array:
+    def integrate(arrays: list[Array]) -> list[Array]:  # the map's raw output
         nonlocal count
         state = dict(base)
         state.update(zip(keys, arrays, strict=True))
@@ -294,16 +298,20 @@ def _arnoldi_on_map(integ, steps: int, keys: list[str], weight: Array, symmetry,
             if not info.converged:
                 raise RuntimeError(f"Floquet multipliers: a perturbed step failed at t = "
                                    f"{integ.t:.6g} s: {info.message}")
+        count += 1
         out = [np.copy(getattr(integ, k)) for k in keys]
-        if symmetry is not None:
-            out = list(symmetry.back(*out, k=1))
+        return out if symmetry is None else list(symmetry.back(*out, k=1))
+
+    def finish(out: list[Array]) -> Array:  # in the input's tangent space, scaled
         if align is not None:
             out = turn_pins(pins, align, out)
         # the velocities' component across the constraints is the scheme's own (its two-step
         # mode): the map's state is the tangent part
         out[1] = consistent(out[0], out[1])
-        count += 1
         return np.concatenate(out) / weight
+
+    def march(arrays: list[Array]) -> Array:
+        return finish(integrate(arrays))
 
     start = [np.copy(base[k]) for k in keys]
     # the base state on the constraints as the perturbed ones will be (a run's Newton
@@ -311,10 +319,10 @@ def _arnoldi_on_map(integ, steps: int, keys: list[str], weight: Array, symmetry,
     # eps, would swamp the differences)
     start[0] = project_positions(system, start[0], t0)
     v_base = consistent(start[0], start[1])
-    x0 = march(start)
+    raw = integrate(start)
     if pins.size:  # the pins' spin back to the input's, the same turn for every output
-        align = spin_alignment(pins, start[0], x0[:n] * weight[:n])
-        x0 = march(start)
+        align = spin_alignment(pins, start[0], raw[0])
+    x0 = finish(raw)
     tangent = position_tangent(system, start[0], t0)
 
     def restrict(x: Array) -> Array:  # positions on the constraints' tangent

@@ -982,15 +982,10 @@ def _multipliers(p: Parameters, integ, system: System, parts: RotorParts
     revolution), or none and why."""
     if not p.floquet:
         return {}, ""
-    omega = p.hub_speed
-    # a unit of velocity is Ω times one of position, a unit of the scheme's accelerations Ω²
-    # times: the Arnoldi vectors weigh a mode's position and rate alike
-    scales = tuple(omega ** min(i, 2) for i in range(
-        len([k for k in integ.STATE if k not in ("t", "lam", "nu")])))
     t = time.perf_counter()
     try:
         mm = map_multipliers(integ, p.steps_per_rev // N_BLADES,
-                             symmetry=symmetry(system, parts), scales=scales,
+                             symmetry=symmetry(system, parts), rate=p.hub_speed,
                              vectors=FLOQUET_VECTORS, eps=FLOQUET_EPS, tol=FLOQUET_TOL,
                              accuracy=FLOQUET_ACCURACY)
     except (RuntimeError, ValueError) as exc:
@@ -998,11 +993,8 @@ def _multipliers(p: Parameters, integ, system: System, parts: RotorParts
     report(f"Floquet multipliers: largest {mm.largest:.4f} ({mm.evaluations} quarter "
            f"revolutions, {time.perf_counter() - t:.1f} s; residual {mm.residuals[0]:.1e}, "
            f"fresh {mm.fresh_residual:.1e})")
-    if not np.isfinite(mm.largest):
-        return {}, (f"no Floquet multipliers: the largest Ritz value {abs(mm.values[0]):.4f} "
-                    f"not converged in {FLOQUET_VECTORS} vectors (residual "
-                    f"{mm.residuals[0]:.1e}, on a fresh application of the map "
-                    f"{mm.fresh_residual:.1e})")
+    if mm.failure:
+        return {}, mm.failure
     return {"floquet_multiplier_max": np.float64(mm.largest),
             "run_floquet_revolutions": np.float64(mm.evaluations / N_BLADES)}, ""
 

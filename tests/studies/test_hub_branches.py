@@ -211,7 +211,7 @@ def test_full_state_multipliers_of_the_free_hub_are_those_of_the_exact_equations
     integ = hub.time_integration(p, sysm)
     found = map_multipliers(integ, p.steps_per_rev // 4,
                             symmetry=hub.symmetry(sysm, hub_body, shaft, parts),
-                            scales=(1.0, p.hub_speed), eps=1e-5)
+                            rate=p.hub_speed, eps=1e-5)
     exact = floquet_multipliers(hub.reduced_response(p, d))
     # measured: the six largest (0.828–0.830) within 1.9e-4 in modulus (ep, 160 steps a
     # revolution); the default 40 composed steps give 8.5e-4 (the run's own minimal-
