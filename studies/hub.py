@@ -74,7 +74,7 @@ from studies.equivalent import EquivalentParts, equivalent_absorber
 from studies.harmonics import N_MAX
 from studies.holes import MAX_TANGENT_ANGLE, Holes
 from studies.parameters import ModelSpec, Output, Param, ParameterError, Parameters
-from studies.periodic import march, richardson, sector_response, shoot, stepper, to_rotating
+from studies.periodic import march, shoot, stepper, to_rotating
 from studies.reduced_hub import (
     SAMPLES,
     PeriodicSwing,
@@ -146,13 +146,7 @@ PARAMETERS: dict[str, Param] = {
     "composition": Param("suzuki", "1", "symmetric composition of the ep step into a "
                          "fourth-order step: suzuki (5 substeps), yoshida (3), or none (the "
                          "plain second-order ep step)", choices=(*COMPOSITIONS, "none")),
-    "error_estimate": Param(True, "1", "estimate the time-step error of the harmonics 0-8 "
-                            "from the periodic response at about twice the step (stored as "
-                            "run_step_error_estimate; also made whenever richardson is true)"),
-    "richardson": Param(True, "1", "extrapolate the harmonics 0-8 to zero step from the "
-                        "response at about twice the time step (Richardson: error O(h^4) -> "
-                        "O(h^6) composed, O(h^2) -> O(h^4) plain), storing the error "
-                        "estimate; at least 40 steps/rev"),
+    **periodic.STEP_ERROR_PARAMETERS,
     "revolutions": Param(2, "1", "whole revolutions recorded once periodic", minimum=1,
                          maximum=50),
     "max_revolutions": Param(80, "1", "revolutions allowed to reach a periodic response",
@@ -176,18 +170,7 @@ OUTPUTS: dict[str, Output] = {
         "fuselage_stiffness_scale)", dims=()),
     "fuselage_damping": Output("N s m-1", "in-plane fuselage damping at the hub", dims=()),
     **periodic.RUN_OUTPUTS,
-    "run_step_error_estimate": Output(
-        "1", "estimated time-step error of the harmonics at the time step (Richardson: "
-        "|c(h) - c(H)|/((H/h)^p - 1) from the periodic response at H, about 2h; largest over "
-        "harmonics 0-8 and signals, relative to each signal's largest harmonic)", dims=(),
-        optional=True),
-    "run_richardson": Output("1", "1 if the archived harmonics 0-8 are extrapolated to zero "
-                             "step (they then carry a fraction of run_step_error_estimate), 0 "
-                             "if they are those of the time step", dims=()),
-    "run_estimate_revolutions": Output("1", "revolutions simulated at the step-error "
-                                       "estimate's coarser step", dims=()),
-    "run_estimate_samples_per_rev": Output("1", "steps per revolution of the step-error "
-                                           "estimate's coarser step (0: no estimate)", dims=()),
+    **periodic.STEP_ERROR_OUTPUTS,
     "run_substeps": Output("1", "substeps of the composed time steps taken", dims=()),
     "floquet_multiplier_max": Output(
         "1", "largest modulus of the periodic response's Floquet multipliers over one "
@@ -579,16 +562,8 @@ def simulate(p: Parameters) -> xr.Dataset:
             notes.append(mm.failure)
         else:
             floquet["floquet_multiplier_max"] = np.float64(mm.largest)
-    step_error = float("nan")
-    n_c = periodic.coarser_steps(nrev, n_sec, N_MAX)
-    extrapolated = False
-    wanted = p.error_estimate or p.richardson
-    # what a case message adds when the estimate fails: the extrapolation, if it was asked for
-    unextrapolated = ", harmonics not extrapolated" if p.richardson else ""
-    if wanted and n_c is None:
-        notes.append(f"no step-error estimate at steps_per_rev = {nrev}{unextrapolated}: a "
-                     f"coarser step would not resolve harmonic {N_MAX}")
-    elif wanted:
+    est = None
+    if p.error_estimate or p.richardson:
         # the periodic response at the coarser step, from the recorded one's end state: its
         # harmonics against the recorded ones estimate the time-step error (Richardson). At
         # most six revolutions of iterates: without shooting's iterates (a run that marched),
@@ -596,27 +571,15 @@ def simulate(p: Parameters) -> xr.Dataset:
         # and the step's 0.63 % error is archived); with them, the slow modes known before the
         # coarse iterates span them (at the coarse samples: every other step's), the cases of
         # a 60-case sweep stop after 4–7
-        coarse = integrator(n_c)
-        coarse.restore(integ.state())
-        runs.append((coarse, n_c))
-        history = ([[align(b, j)[1::2] for b, j in run] for run in rec.iterates]
-                   if nrev == 2 * n_c else None)
-        try:
-            rev, uncertainty, _ = sector_response(
-                coarse, sampler(coarse), align, n_sectors=n_sec, steps_per_rev=n_c,
-                reference=data, omega=omega, n_max=N_MAX, accuracy=ESTIMATE_ACCURACY,
-                max_iterates=6 * max(n_sec, 2), history=history)
-        except RuntimeError as exc:
-            notes.append(f"no step-error estimate{unextrapolated}: {exc}")
-        else:
-            corrected, est = richardson(data, rev, omega, N_MAX,
-                                        order=2 if p.composition == "none" else 4)
-            step_error = float(est.max())
-            if uncertainty > ESTIMATE_ACCURACY:
-                notes.append(f"step-error estimate uncertain by {uncertainty:.0%}"
-                             f"{unextrapolated}")
-            elif p.richardson:
-                data, extrapolated = corrected, True
+        est = periodic.step_error(
+            rec, integ.state(), integrator, sampler, align, n_sectors=n_sec,
+            steps_per_rev=nrev, omega=omega, order=2 if p.composition == "none" else 4,
+            extrapolate=p.richardson, accuracy=ESTIMATE_ACCURACY,
+            max_iterates=6 * max(n_sec, 2), n_max=N_MAX)
+        data = est.samples
+        notes.append(est.note)
+        if est.integrator is not None:
+            runs.append((est.integrator, est.steps_per_rev))
     series = recorded_outputs(omega, data)
     facts = {
         **periodic.run_facts(
@@ -625,19 +588,15 @@ def simulate(p: Parameters) -> xr.Dataset:
             steps=sum(i.n_steps for i, _ in runs),
             iterations=sum(i.n_iterations for i, _ in runs),
             seconds=time.perf_counter() - t0),
-        "run_richardson": np.int32(extrapolated),
-        "run_estimate_revolutions": np.float64(sum(i.n_steps / n for i, n in runs[1:])),
-        "run_estimate_samples_per_rev": np.int32(n_c if len(runs) > 1 else 0),
+        **(periodic.StepError(data) if est is None else est).facts(),
         "run_substeps": np.int32(sum(getattr(i, "n_substeps", i.n_steps) for i, _ in runs)),
         "tuning_order_linear": np.float64(d.holes.order_linear),
         "pin_damping": np.float64(d.pin_damping),
         "effective_fuselage_stiffness": np.float64(k),
         "fuselage_damping": np.float64(c),
     }
-    if np.isfinite(step_error):
-        facts["run_step_error_estimate"] = np.float64(step_error)
     facts.update(floquet)
-    ds = SPEC.dataset({**series, **facts}, {"message": "; ".join(notes)})
+    ds = SPEC.dataset({**series, **facts}, {"message": "; ".join(filter(None, notes))})
     return ds
 
 
