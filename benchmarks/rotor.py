@@ -4,6 +4,7 @@
                                              [--inflow prescribed_wake] [--profile]
     PYTHONPATH=. python benchmarks/rotor.py --case [--bifilar free]     # one whole case
     PYTHONPATH=. python benchmarks/rotor.py --case --no-floquet         # without its multipliers
+    PYTHONPATH=. python benchmarks/rotor.py --case --no-estimate        # without its step error
     PYTHONPATH=. python benchmarks/rotor.py --case --trim wind_tunnel   # trimmed, and untrimmed
     PYTHONPATH=. python benchmarks/rotor.py --wake-update               # one wake update
 
@@ -12,8 +13,9 @@ The first form builds the model with its defaults (``--steps-per-rev`` to change
 revolution, steps per second and Newton iterations per step; ``--profile`` runs the loop under
 pyinstrument and prints the profile (the modules that take the time). The second runs one case
 as the sweep does (settling, marching until periodic, recording) and prints its wall time,
-revolutions and Newton iterations per step, its largest Floquet multiplier (``--no-floquet``:
-none, to time the case without them) and, with the prescribed wake, its updates; with
+revolutions (those of the step-error estimate's coarser step among them) and Newton iterations
+per step, its step-error estimate (``--no-estimate``: none, and no extrapolation), its largest
+Floquet multiplier (``--no-floquet``: none) and, with the prescribed wake, its updates; with
 ``--trim`` it runs the case trimmed and untrimmed and prints both, the trim's control updates,
 its residuals and the revolutions' ratio (``--coarse``: the coarse case of the tests, 120
 steps/rev, 3 elements, 3 settling revolutions, periodic to 5 %). The third times one update
@@ -69,6 +71,8 @@ def per_case(p: Parameters) -> dict:
     revs = ds["run_simulated_revolutions"].item()
     return {"bifilar": p.bifilar, "inflow": p.inflow, "trim": p.trim, "wall_s": round(wall, 1),
             "revolutions": revs, "wake_updates": int(ds["run_wake_updates"].item()),
+            "estimate_revolutions": ds["run_estimate_revolutions"].item(),
+            "step_error_estimate": round(float(ds.get("run_step_error_estimate", np.nan)), 4),
             "floquet_multiplier_max": round(float(ds.get("floquet_multiplier_max", np.nan)), 4),
             "seconds_per_rev": round(wall / revs, 2),
             "newton_per_step": round(
@@ -113,10 +117,13 @@ def main() -> None:
                    help="the coarse case of the tests (120 steps/rev, 3 elements)")
     a.add_argument("--no-floquet", action="store_true",
                    help="with --case: without the Floquet multipliers")
+    a.add_argument("--no-estimate", action="store_true",
+                   help="with --case: without the step-error estimate and extrapolation")
     a.add_argument("--wake-update", action="store_true",
                    help="time one update of the prescribed wake")
     args = a.parse_args()
-    given = {"bifilar": args.bifilar, "inflow": args.inflow, "floquet": not args.no_floquet}
+    given = {"bifilar": args.bifilar, "inflow": args.inflow, "floquet": not args.no_floquet,
+             "error_estimate": not args.no_estimate, "richardson": not args.no_estimate}
     if args.steps_per_rev:
         given["steps_per_rev"] = args.steps_per_rev
     if args.scheme:

@@ -86,7 +86,8 @@ PARAMETERS: dict[str, Param] = {
     "wake_error_estimate": Param(True, "1", "estimate the wake's truncation error of the 4P "
                                  "hub loads (run_wake_error_estimate) by one more periodic "
                                  "response with the wake refined"),
-    "wake_iterations": Param(15, "1", "wake updates allowed after settling", minimum=1,
+    "wake_iterations": Param(15, "1", "wake updates allowed after settling, at each setting of "
+                             "the controls (a trim's)", minimum=1,
                              maximum=100),
 }
 
@@ -133,10 +134,9 @@ class RotorWake:
         # blade k at time t is where blade 0 is at t + kT/Q
         self.winds = [PeriodicWind(self.period, self.table, delay=k * self.period / blades)
                       for k in range(blades)]
-        r = UH60A.radius
-        tilt = math.radians(p.shaft_tilt)
-        self.mu = p.flight_speed * math.cos(tilt) / (self.omega * r)
-        self.lam_f = p.flight_speed * math.sin(tilt) / (self.omega * r)
+        # the forward shaft tilt (rad) the wake's geometry is laid out for: a trim that tilts
+        # the shaft sets it before each update
+        self.shaft_tilt = math.radians(p.shaft_tilt)
         # blade 0's histories over its last revolution, by azimuth slot
         self.points = np.zeros((self.n, n_sections, 3))
         self.inflow = np.zeros((self.n, n_sections, 3))
@@ -154,6 +154,18 @@ class RotorWake:
         self.fineness = 1
 
     # ------------------------------------------------------------------ the wake
+    @property
+    def mu(self) -> float:
+        """Advance ratio: the free stream's component in the disk plane, on ΩR."""
+        return (self.p.flight_speed * math.cos(self.shaft_tilt)
+                / (self.omega * UH60A.radius))
+
+    @property
+    def lam_f(self) -> float:
+        """The free stream's inflow through the disk (down), on ΩR."""
+        return (self.p.flight_speed * math.sin(self.shaft_tilt)
+                / (self.omega * UH60A.radius))
+
     def wake(self, ct: float) -> TipVortexWake:
         """The wake's geometry for the thrust coefficient ``ct`` (refined :attr:`fineness`
         times in length and segments per turn)."""
@@ -226,6 +238,13 @@ class RotorWake:
         self.fineness = 2
         self.table[:] = (self._velocities(self.points, self.gamma, self.tip, self.root,
                                           self.thrust_coefficient) - self.inflow)
+
+    def forget(self) -> None:
+        """Drop the iterates Anderson's acceleration remembers: after a change of the controls
+        the response, and with it the wake's fixed-point map, is another (measured on a
+        propulsively trimmed case: with the old iterates kept, the change stalled at 0.067 for
+        six updates)."""
+        self.history.clear()
 
     def update(self, accelerate: bool = False) -> float:
         """Recompute the wake from blade 0's last revolution and move the table towards it;

@@ -110,10 +110,6 @@ def check(p: Parameters) -> None:
         if p.flight_speed <= 0.0:
             raise ParameterError(f"flight_speed = {p.flight_speed:g} m s-1: propulsive trim "
                                  "needs forward flight (> 0)")
-        if getattr(p, "inflow", "peters_he") != "peters_he":
-            raise ParameterError(f"inflow = {p.inflow}: propulsive trim changes the shaft tilt, "
-                                 "which the prescribed wake's geometry does not follow; use "
-                                 "inflow = peters_he")
 
 
 def smoothstep(tau: float) -> tuple[float, float, float]:

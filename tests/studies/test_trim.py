@@ -313,8 +313,10 @@ def test_second_harmonic_closed_form_is_the_harmonic_balance_to_its_order(mu):
 
 # ---- the UH-60 model ---------------------------------------------------------------------------
 # the coarse case of tests/studies/test_rotor_outputs.py: untrimmed, 15.5 revolutions
+# (without the step-error estimate: the revolutions compared are the periodic response's)
 COARSE = {"steps_per_rev": 120, "blade_elements": 3, "wake_states": 2,
-          "settle_revolutions": 3, "periodic_tolerance": 0.05}
+          "settle_revolutions": 3, "periodic_tolerance": 0.05, "error_estimate": False,
+          "richardson": False}
 UNTRIMMED_REVOLUTIONS = 15.5
 
 
@@ -325,8 +327,6 @@ def test_bad_trim_input_is_refused():
         rotor.SPEC.validate({"trim": "wind_tunnel", "thrust_coefficient": 0.3})
     with pytest.raises(ParameterError, match="flight_speed"):
         rotor.SPEC.validate({"trim": "propulsive", "flight_speed": 0.0})
-    with pytest.raises(ParameterError, match="inflow"):
-        rotor.SPEC.validate({"trim": "propulsive", "inflow": "prescribed_wake"})
     with pytest.raises(ParameterError, match="gross_weight"):
         rotor.SPEC.validate({"trim": "propulsive", "gross_weight": -1.0})
 
@@ -360,8 +360,12 @@ def test_uh60_wind_tunnel_trim(wind_tunnel):
 
 
 @pytest.mark.slow
-def test_uh60_propulsive_trim():
-    p = rotor.SPEC.validate({**COARSE, "trim": "propulsive"})
+@pytest.mark.parametrize("inflow", ["peters_he", "prescribed_wake"])
+def test_uh60_propulsive_trim(inflow):
+    """The prescribed wake is laid out for each shaft tilt the trim flies (measured with it:
+    trimmed in 5 control updates, tilt 2.82°, vertical force +0.06 %, propulsive force −0.12 %
+    of the weight, 70 revolutions with 14 wake updates)."""
+    p = rotor.SPEC.validate({**COARSE, "trim": "propulsive", "inflow": inflow})
     ds = rotor.run(p)
     # the rotor's mean force on the airframe (the fuselage-beam's top section, whose mean is
     # the aerodynamic force: no gravity) in the flight's axes carries the weight and balances
@@ -380,8 +384,9 @@ def test_uh60_propulsive_trim():
     # the shaft tilts forward by about the drag-to-weight angle plus the H-force's: D/W =
     # 0.043 (2.4°), measured 3.1°
     assert math.degrees(math.atan(drag / p.gross_weight)) < float(ds.control_shaft_tilt) < 5.0
-    # measured 28.5 revolutions against the untrimmed 15.5
-    assert float(ds.run_simulated_revolutions) <= 2 * UNTRIMMED_REVOLUTIONS
+    # measured 28.5 revolutions against the untrimmed 15.5 (Peters–He)
+    if inflow == "peters_he":
+        assert float(ds.run_simulated_revolutions) <= 2 * UNTRIMMED_REVOLUTIONS
 
 
 @pytest.mark.slow
