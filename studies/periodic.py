@@ -978,7 +978,8 @@ def step_error(rec: PeriodicRecord, state: dict, coarse: Callable[[int], object]
                sampler: Callable[[object], Callable[[], Array]],
                align: Callable[[Array, int], Array], *, n_sectors: int, steps_per_rev: int,
                omega: float, order: int, extrapolate: bool, accuracy: float = 0.1,
-               max_iterates: int = 12, n_max: int = 8, ratio: float = 2.0) -> StepError:
+               max_iterates: int = 12, n_max: int = 8, ratio: float = 2.0,
+               usable: float | None = None) -> StepError:
     """The time-step error of a periodic response's harmonics, and their Richardson
     extrapolation to zero step.
 
@@ -991,8 +992,11 @@ def step_error(rec: PeriodicRecord, state: dict, coarse: Callable[[int], object]
     ``order`` then gives the estimate and, with ``extrapolate``, the extrapolated samples.
     ``sampler(integ)`` makes the row sampler of an integrator, ``align`` is
     :func:`sector_response`'s, ``accuracy`` the estimate's own relative accuracy and
-    ``max_iterates`` the most sector periods marched at the coarse step. Failures are not
-    raised: the result then keeps ``rec``'s samples and says why in ``note``.
+    ``max_iterates`` the most sector periods marched at the coarse step. An estimate whose
+    iterates ran out before ``accuracy`` is still applied up to an uncertainty of ``usable``
+    (default ``accuracy``; the note says how uncertain), which leaves that fraction of the
+    step's error. Failures are not raised: the result then keeps ``rec``'s samples and says
+    why in ``note``.
     """
     unextrapolated = ", harmonics not extrapolated" if extrapolate else ""
     n_c = coarser_steps(steps_per_rev, n_sectors, n_max, ratio)
@@ -1016,8 +1020,10 @@ def step_error(rec: PeriodicRecord, state: dict, coarse: Callable[[int], object]
         return result
     corrected, est = richardson(rec.samples, rev, omega, n_max, order=order)
     result.estimate = float(est.max())
+    usable = accuracy if usable is None else usable
     if uncertainty > accuracy:
-        result.note = f"step-error estimate uncertain by {uncertainty:.0%}{unextrapolated}"
-    elif extrapolate:
+        result.note = (f"step-error estimate uncertain by {uncertainty:.0%}"
+                       f"{unextrapolated if uncertainty > usable else ''}")
+    if extrapolate and uncertainty <= usable:
         result.samples, result.extrapolated = corrected, True
     return result
