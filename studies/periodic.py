@@ -905,18 +905,20 @@ def sector_response(integ, sample: Callable[[], Array], align: Callable[[Array, 
 # switches, and what it reports.
 STEP_ERROR_PARAMETERS: dict[str, Param] = {
     "error_estimate": Param(True, "1", "estimate the time-step error of the harmonics 0-8 "
-                            "from the periodic response at about twice the step (stored as "
+                            "from the periodic response at a coarser step (the hub's about "
+                            "twice its step, the rotor's 4/3 of it; stored as "
                             "run_step_error_estimate; also made whenever richardson is true)"),
     "richardson": Param(True, "1", "extrapolate the harmonics 0-8 to zero step from the "
-                        "periodic response at about twice the time step (Richardson on the "
-                        "scheme's leading error term), storing the error estimate"),
+                        "periodic response at that coarser step (Richardson on the scheme's "
+                        "leading error term), storing the error estimate"),
 }
 
 STEP_ERROR_OUTPUTS: dict[str, Output] = {
     "run_step_error_estimate": Output(
         "1", "estimated time-step error of the harmonics at the time step (Richardson: "
-        "|c(h) - c(H)|/((H/h)^p - 1) from the periodic response at H, about 2h; largest over "
-        "harmonics 0-8 and signals, relative to each signal's largest harmonic)", dims=(),
+        "|c(h) - c(H)|/((H/h)^p - 1) from the periodic response at the coarser step H, "
+        "run_estimate_samples_per_rev; largest over harmonics 0-8 and signals, relative to "
+        "each signal's largest harmonic)", dims=(),
         optional=True),
     "run_richardson": Output("1", "1 if the archived harmonics 0-8 are extrapolated to zero "
                              "step (they then carry a fraction of run_step_error_estimate), 0 "
@@ -958,11 +960,10 @@ class StepError:
 
 def resample(block: Array, m: int) -> Array:
     """A block of samples one sector long (rows: time, then the signals; one per step, the
-    first a step after the sector's start) at m samples instead, likewise placed: the samples
-    themselves where the new times are among the old (m divides the rows), else cubic spline
-    interpolation through the sector's start (the block's first sample extended back one step
-    by the spline's end condition: error O(h⁴), 1e-5 of an 8P harmonic at 240 steps a
-    revolution)."""
+    first a step after the sector's start) at m < rows samples instead, likewise placed: the
+    samples themselves where the new times are among the old (m divides the rows), else a
+    cubic spline through the block's samples, between which the new times lie (error O(h⁴):
+    1e-5 of an 8P harmonic at 240 steps a revolution)."""
     n = len(block)
     if n % m == 0:
         return block[n // m - 1 :: n // m]
@@ -988,8 +989,8 @@ def step_error(rec: PeriodicRecord, state: dict, coarse: Callable[[int], object]
     ``ratio`` (``coarse(n)``: an integrator at n steps a revolution) reaches its own periodic
     response by :func:`sector_response` (with ``rec``'s shooting iterates, resampled to the
     coarse step's sample times by :func:`resample`, as the slow modes' history);
-    :func:`richardson` of order
-    ``order`` then gives the estimate and, with ``extrapolate``, the extrapolated samples.
+    :func:`richardson` of order ``order`` then gives the estimate and, with ``extrapolate``,
+    the extrapolated samples.
     ``sampler(integ)`` makes the row sampler of an integrator, ``align`` is
     :func:`sector_response`'s, ``accuracy`` the estimate's own relative accuracy and
     ``max_iterates`` the most sector periods marched at the coarse step. An estimate whose
