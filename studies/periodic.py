@@ -963,7 +963,7 @@ def resample(block: Array, m: int) -> Array:
     first a step after the sector's start) at m < rows samples instead, likewise placed: the
     samples themselves where the new times are among the old (m divides the rows), else a
     cubic spline through the block's samples, between which the new times lie (error O(h⁴):
-    1e-5 of an 8P harmonic at 240 steps a revolution)."""
+    5e-5 of an 8P harmonic at 240 steps a revolution, largest near the block's ends)."""
     n = len(block)
     if n % m == 0:
         return block[n // m - 1 :: n // m]

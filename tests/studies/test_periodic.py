@@ -20,6 +20,7 @@ from studies.periodic import (
     coarser_steps,
     harmonic_change,
     march,
+    resample,
     rev_harmonics,
     richardson,
     rre_weights,
@@ -207,6 +208,27 @@ def test_coarser_steps_resolve_the_harmonics():
     assert coarser_steps(44, 4, 8) == 20  # the largest multiple of the sectors below half
     assert coarser_steps(36, 4, 8) is None  # 16 samples: harmonic 8 is the Nyquist one
     assert coarser_steps(37, 1, 8) == 18
+    assert coarser_steps(240, 4, 8, ratio=4 / 3) == 180  # the rotor's companion
+    assert coarser_steps(242, 4, 8, ratio=4 / 3) == 180
+    with pytest.raises(ValueError, match="ratio"):
+        coarser_steps(240, 4, 8, ratio=1.0)
+
+
+def test_resample_puts_a_sectors_samples_at_the_coarser_steps_times():
+    """Every other sample at twice the step; at 3/4 of the steps a cubic spline, whose error
+    at 240 steps a revolution is O(h⁴): measured 4.9e-5 of harmonic 8's amplitude (its largest
+    near the block's ends) and 1.1e-6 of harmonic 3's."""
+    h = 1.0 / 240  # s, one revolution per second
+    t = (np.arange(60) + 1) * h + 0.25  # the second quarter revolution
+    signal = np.column_stack([np.cos(2 * np.pi * 8 * t), np.sin(2 * np.pi * 3 * t)])
+    block = np.column_stack([t, signal])
+    np.testing.assert_array_equal(resample(block, 30), block[1::2])
+    coarse = resample(block, 45)
+    np.testing.assert_allclose(coarse[:, 0], 0.25 + (np.arange(45) + 1) / 180, atol=1e-15)
+    exact = np.column_stack([np.cos(2 * np.pi * 8 * coarse[:, 0]),
+                             np.sin(2 * np.pi * 3 * coarse[:, 0])])
+    assert np.abs(coarse[:, 1] - exact[:, 0]).max() < 1e-4
+    assert np.abs(coarse[:, 2] - exact[:, 1]).max() < 3e-6
 
 
 class _Ring:

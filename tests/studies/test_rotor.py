@@ -381,3 +381,29 @@ def test_finer_steps_shoot_to_the_periodic_response(steps_per_rev):
     assert float(ds.run_periodicity_change) <= 1e-3
     revolutions = float(ds.run_simulated_revolutions) - float(ds.run_estimate_revolutions)
     assert revolutions <= 24
+
+
+def test_align_moves_blades_and_pins_to_the_starting_phase():
+    """On a response with the rotor's quarter-revolution symmetry, blade k (and pin k) at t
+    doing what blade 0 does at t + kT/4 (measured on Table 1's locked case: to 3e-4 of the
+    root shear), a block of samples ending j quarter revolutions on, aligned, is the first
+    quarter's; the fixed-frame columns repeat every quarter revolution as they are."""
+    from studies.rotor import N_BIFILARS, N_BLADES, _Sampler, align
+
+    cols = _Sampler.COLUMNS
+    t = (np.arange(4 * 60) + 1) / 240  # one revolution of 1 s, 60 steps a quarter
+    rows = np.zeros((t.size, len(cols) + N_BIFILARS))
+    rows[:, 0] = t
+    for i in range(1, len(cols)):  # fixed-frame: 4P and its multiples
+        rows[:, i] = np.cos(2 * np.pi * 4 * t + i)
+    for k in range(N_BLADES):  # blade k at t is blade 0 at t + k/4
+        for c in _Sampler.BLADE_COLUMNS:
+            i = cols.index(c if k == 0 else f"{c}_{k}")
+            rows[:, i] = np.sin(2 * np.pi * (t + k / 4)) + 0.3 * np.cos(6 * np.pi * (t + k / 4))
+    for k in range(N_BIFILARS):  # pin k likewise
+        rows[:, len(cols) + k] = np.sin(2 * np.pi * 3 * (t + k / 4) + 0.2)
+    first = rows[:60]
+    for j in range(1, 4):
+        block = rows[60 * j : 60 * (j + 1)]
+        np.testing.assert_allclose(align(block, j)[:, 1:], first[:, 1:], atol=1e-12)
+        np.testing.assert_array_equal(align(align(block, j), -j), block)
