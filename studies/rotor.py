@@ -980,8 +980,8 @@ def simulate(p: Parameters) -> xr.Dataset:
     est = None
     if p.error_estimate or p.richardson:
         # the periodic response at a coarser step, from the recorded one's end: the harmonics'
-        # time-step error and their extrapolation to zero step (galpha: second order)
-        # to a whole quarter revolution (a trim's ramp may end between)
+        # time-step error and their extrapolation to zero step (each scheme second order).
+        # First to a whole quarter revolution (a trim's ramp may end between):
         while integ.t < math.ceil(integ.t / sector - 1e-6) * sector - 0.5 * h:
             step()
 
