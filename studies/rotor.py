@@ -881,7 +881,7 @@ def simulate(p: Parameters) -> xr.Dataset:
     def signals(block: np.ndarray) -> np.ndarray:
         # periodicity of the hub motion in the rotating frame, the hub forces and the pins
         xr_, yr_ = to_rotating(omega, block[:, 0], block[:, 1], block[:, 2])
-        return np.column_stack([xr_, yr_, block[:, 3:5], block[:, len(_Sampler.COLUMNS):]])
+        return np.column_stack([xr_, yr_, block[:, 3:5], block[:, _PINS]])
 
     groups = [0, 0, 1, 1] + [2] * N_BIFILARS
     # the smallest scales the periodicity test judges the signals' harmonics against (see
@@ -897,7 +897,7 @@ def simulate(p: Parameters) -> xr.Dataset:
     # the quarter-revolution map's observations at the starting phase: the fixed-frame hub
     # motion, forces and fuselage moments (T/4-periodic) and the pins moved j ahead
     observed = [*(_Sampler.COLUMNS.index(c) for c in ("x", "y", "fx", "fy", "m11", "m22")),
-                *range(len(_Sampler.COLUMNS), len(_Sampler.COLUMNS) + N_BIFILARS)]
+                *range(_PINS.start, _PINS.stop)]
 
     def observe(block: np.ndarray, j: int) -> np.ndarray:
         return align(block, j)[:, observed]
@@ -1046,7 +1046,7 @@ def simulate(p: Parameters) -> xr.Dataset:
         "fuselage_moment_y_fixed": col["m22"],
         "bifilar_cm_x_fixed": col["cmx"],
         "bifilar_cm_y_fixed": col["cmy"],
-        "pin_angle": data[:, len(_Sampler.COLUMNS):].T,
+        "pin_angle": data[:, _PINS].T,
         "thrust": col["thrust"],
         "mean_inflow": col["lam0"],
         "blade_root_shear_flap": col["v3"],
