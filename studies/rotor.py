@@ -216,7 +216,7 @@ PARAMETERS: dict[str, Param] = {
                          minimum=0.0, maximum=1e6),
     "wake_states": Param(4, "1", "Peters finite-state wake states per airfoil section",
                          minimum=0, maximum=10),
-    "aero_points": Param(2, "1", "aerodynamic sections (Gauss points) per blade element",
+    "aero_points": Param(3, "1", "aerodynamic sections (Gauss points) per blade element",
                          minimum=1, maximum=8),
     "inflow_harmonics": Param(2, "1", "highest harmonic M of the Peters–He inflow (power P = "
                               "M + 1)", minimum=1, maximum=8),
@@ -1193,6 +1193,6 @@ def _check(p: Parameters) -> None:
 SPEC = ModelSpec("rotor", PARAMETERS, simulate, _check,
                  description="four-bladed elastic UH-60 rotor with aerodynamics and four "
                              "bifilars on a fuselage-beam",
-                 outputs=OUTPUTS, version="8",
+                 outputs=OUTPUTS, version="9",
                  # the two parts take about as long to compile (curve joints / the rest)
                  warm_up=(partial(compile_bifilar, "galpha"), compile_kernels))

@@ -61,7 +61,7 @@ Array = NDArray[np.float64]
 INFLOW_MODELS = ("peters_he", "prescribed_wake")
 
 PARAMETERS: dict[str, Param] = {
-    "inflow": Param("peters_he", "1", "rotor inflow model: Peters–He finite states, or those "
+    "inflow": Param("prescribed_wake", "1", "rotor inflow model: Peters–He finite states, or those "
                     "corrected to the inflow of a prescribed tip-vortex wake iterated with the "
                     "periodic response",
                     choices=INFLOW_MODELS),

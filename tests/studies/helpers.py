@@ -11,3 +11,9 @@ def hub_samples(ds) -> np.ndarray:
     return np.column_stack([ds["time"].values, *(ds[k].values for k in (
         "hub_x_fixed", "hub_y_fixed", "hub_force_x_fixed", "hub_force_y_fixed",
         "bifilar_cm_x_fixed", "bifilar_cm_y_fixed")), ds["pin_angle"].values.T])
+
+
+# The rotor with the Peters–He inflow alone and two aerodynamic sections per element: what the
+# tests run that are about anything but the inflow (a third of the prescribed wake's
+# revolutions, each cheaper). The inflow's convergence is tested in test_rotor_wake.py.
+PETERS_HE = {"inflow": "peters_he", "aero_points": 2}

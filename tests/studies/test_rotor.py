@@ -171,14 +171,16 @@ def test_bad_input_names_the_parameter(bad, match):
 
 def _table1_archive(tmp):
     """Table 1's cases 0–3 of the built-in rotor study (as `bifilar run` declares them) at
-    120 steps/rev, run through the sweep on two workers."""
+    120 steps/rev with the paper's aerodynamic model (the Peters–He inflow alone, two sections
+    per element), run through the sweep on two workers."""
     from pipelines.archive import open_archive, status_counts
     from pipelines.cli import default_study
     from pipelines.sweep import run_sweep
 
     text = default_study("rotor").read_text()
     study = tmp / "study.toml"
-    study.write_text(text[: text.index('[[cases]]\nname = "4:')] + "[fixed]\nsteps_per_rev = 120\n")
+    study.write_text(text[: text.index('[[cases]]\nname = "4:')]
+                     + '[fixed]\nsteps_per_rev = 120\ninflow = "peters_he"\naero_points = 2\n')
     ds = open_archive(run_sweep(study, tmp / "out", workers=2, progress=False))
     assert status_counts(ds)["ok"] == 4, ds.message.values
     return ds

@@ -12,6 +12,7 @@ import pytest
 
 import studies.rotor as rotor
 from solver.integrators import project_positions, project_velocities
+from tests.studies.helpers import PETERS_HE
 
 pytestmark = pytest.mark.slow
 
@@ -35,7 +36,7 @@ def test_largest_multiplier_is_the_decay_of_its_mode(monkeypatch):
         return seen["result"]
 
     monkeypatch.setattr(rotor, "map_multipliers", spy)
-    ds = rotor.run({"bifilar": "locked"})
+    ds = rotor.run({**PETERS_HE, "bifilar": "locked"})
     found = seen["result"]
     assert float(ds.floquet_multiplier_max) == pytest.approx(found.largest)
     integ, steps = seen["integ"], seen["steps"]

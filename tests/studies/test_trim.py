@@ -44,6 +44,7 @@ from solver.system import System
 from studies import rotor, trim
 from studies.parameters import ParameterError
 from studies.uh60a import UH60A, blade_airstations, blade_chord
+from tests.studies.helpers import PETERS_HE
 
 Z = np.array([0.0, 0.0, 1.0])
 
@@ -314,7 +315,7 @@ def test_second_harmonic_closed_form_is_the_harmonic_balance_to_its_order(mu):
 # ---- the UH-60 model ---------------------------------------------------------------------------
 # the coarse case of tests/studies/test_rotor_outputs.py: untrimmed, 15.5 revolutions
 # (without the step-error estimate: the revolutions compared are the periodic response's)
-COARSE = {"steps_per_rev": 120, "blade_elements": 3, "wake_states": 2,
+COARSE = {**PETERS_HE, "steps_per_rev": 120, "blade_elements": 3, "wake_states": 2,
           "settle_revolutions": 3, "periodic_tolerance": 0.05, "error_estimate": False,
           "richardson": False}
 UNTRIMMED_REVOLUTIONS = 15.5
@@ -397,7 +398,8 @@ def test_forward_flight_power_is_induced_profile_and_parasite():
     induced-power factor of a disk loaded to the tip-loss radius B R, and D the parasite drag
     ½ρU²f."""
     speed = 120 * 0.514444  # m/s
-    ds = rotor.run({"trim": "propulsive", "flight_speed": speed, "bifilar": "locked",
+    ds = rotor.run({**PETERS_HE, "trim": "propulsive", "flight_speed": speed,
+                    "bifilar": "locked",
                     "settle_revolutions": 10})
     p = rotor.SPEC.validate({})
     tip_speed = p.hub_speed * UH60A.radius
@@ -551,7 +553,7 @@ def test_trimmed_rotor_at_low_speed_is_periodic_and_stable():
     largest Floquet multiplier (the lag-regressive/fuselage mode) is well inside the unit
     circle. Measured: periodic in 33.25 revolutions (10 of them settling), multiplier
     0.9121."""
-    ds = rotor.run({"trim": "propulsive", "flight_speed": 40 * 1852 / 3600,
+    ds = rotor.run({**PETERS_HE, "trim": "propulsive", "flight_speed": 40 * 1852 / 3600,
                     "bifilar": "locked", "settle_revolutions": 10})
     assert float(ds.run_periodicity_change) <= 1e-2
     assert 0.85 < float(ds.floquet_multiplier_max) < 0.95
