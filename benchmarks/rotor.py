@@ -1,7 +1,7 @@
 """Rotor benchmark: the UH-60 rotor model (studies/rotor.py) per revolution and per case.
 
     PYTHONPATH=. python benchmarks/rotor.py --revolutions 2 [--bifilar free] [--scheme ed]
-                                             [--inflow prescribed_wake] [--profile]
+                                             [--inflow peters_he] [--aero-points 2] [--profile]
     PYTHONPATH=. python benchmarks/rotor.py --case [--bifilar free]     # one whole case
     PYTHONPATH=. python benchmarks/rotor.py --case --no-floquet         # without its multipliers
     PYTHONPATH=. python benchmarks/rotor.py --case --no-estimate        # without its step error
@@ -18,7 +18,8 @@ per step, its step-error estimate (``--no-estimate``: none, and no extrapolation
 Floquet multiplier (``--no-floquet``: none) and, with the prescribed wake, its updates; with
 ``--trim`` it runs the case trimmed and untrimmed and prints both, the trim's control updates,
 its residuals and the revolutions' ratio (``--coarse``: the coarse case of the tests, 120
-steps/rev, 3 elements, 3 settling revolutions, periodic to 5 %). The third times one update
+steps/rev, 3 elements, 3 settling revolutions, periodic to 5 %, Peters–He alone unless
+``--inflow`` says otherwise). The third times one update
 of the prescribed wake (Biot–Savart over the revolution's azimuths at blade 0's sections) at
 the model's wake parameters.
 """
@@ -109,7 +110,10 @@ def main() -> None:
     a.add_argument("--scheme", default=None, choices=["galpha", "ed", "ep"],
                    help="time integration scheme (default: the model's, galpha)")
     a.add_argument("--profile", action="store_true")
-    a.add_argument("--inflow", default="peters_he", choices=["peters_he", "prescribed_wake"])
+    a.add_argument("--inflow", default=None, choices=["peters_he", "prescribed_wake"],
+                   help="the rotor's inflow model (default: the model's, the prescribed wake)")
+    a.add_argument("--aero-points", type=int, default=None,
+                   help="aerodynamic sections per blade element (default: the model's, 3)")
     a.add_argument("--case", action="store_true", help="run one whole case")
     a.add_argument("--trim", default=None, choices=["wind_tunnel", "propulsive"],
                    help="with --case: run it trimmed and untrimmed")
@@ -122,15 +126,20 @@ def main() -> None:
     a.add_argument("--wake-update", action="store_true",
                    help="time one update of the prescribed wake")
     args = a.parse_args()
-    given = {"bifilar": args.bifilar, "inflow": args.inflow, "floquet": not args.no_floquet,
+    given = {"bifilar": args.bifilar, "floquet": not args.no_floquet,
              "error_estimate": not args.no_estimate, "richardson": not args.no_estimate}
+    if args.inflow:
+        given["inflow"] = args.inflow
+    if args.aero_points:
+        given["aero_points"] = args.aero_points
     if args.steps_per_rev:
         given["steps_per_rev"] = args.steps_per_rev
     if args.scheme:
         given["scheme"] = args.scheme
     if args.coarse:
-        given.update(steps_per_rev=120, blade_elements=3, wake_states=2, settle_revolutions=3,
-                     periodic_tolerance=0.05)
+        given = {"inflow": "peters_he", "aero_points": 2, **given, "steps_per_rev": 120,
+                 "blade_elements": 3, "wake_states": 2, "settle_revolutions": 3,
+                 "periodic_tolerance": 0.05}
     p = SPEC.validate(given)
     if args.wake_update:
         res = wake_update(SPEC.validate({**given, "inflow": "prescribed_wake"}))

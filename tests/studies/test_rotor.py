@@ -337,14 +337,15 @@ def test_table1_trends(tmp_path):
 
 
 def test_newton_tolerance_falls_as_h_cubed_at_fine_steps():
-    """Newton's tolerance is 1e-8 (at 1e-7 the trimmed rotor at 40–60 kt never became
-    periodic) until 1e-7 at 240 steps/rev falling as h³ is smaller (Newton's error adds up
-    over 1/h steps while the scheme's falls as h²): 1e-8 at 480, where 1e-7 left the free
-    case's harmonics changing by 3 % after 80 revolutions, 1.5625e-9 at 960."""
+    """Newton's tolerance is 1e-9 (at 1e-7 the trimmed rotor at 40–60 kt never became
+    periodic with Peters–He, at 1e-8 not at 40 kt with the prescribed wake) until 1e-7 at 240
+    steps/rev falling as h³ is smaller (Newton's error adds up over 1/h steps while the
+    scheme's falls as h²; at 480 steps/rev 1e-7 left the free case's harmonics changing by 3 %
+    after 80 revolutions): 1.953125e-10 at 1920."""
     from studies.rotor import newton_tolerance
 
-    assert newton_tolerance(120) == newton_tolerance(240) == newton_tolerance(480) == 1e-8
-    assert math.isclose(newton_tolerance(960), 1.5625e-9, rel_tol=1e-12)
+    assert newton_tolerance(120) == newton_tolerance(240) == newton_tolerance(960) == 1e-9
+    assert math.isclose(newton_tolerance(1920), 1.953125e-10, rel_tol=1e-12)
 
 
 def test_wake_states_are_judged_on_their_own_tolerance():
