@@ -76,7 +76,7 @@ import xarray as xr
 
 from solver.air import FlightCondition
 from solver.beams import Beam, SectionProbe, straight_beam
-from solver.bodies import RigidBody, ground
+from solver.bodies import Body, RigidBody, ground
 from solver.forces import RelativeRotation, Spring
 from solver.inflow import DynamicInflow
 from solver.integrators import Integrator, make_integrator
@@ -86,7 +86,7 @@ from solver.model import Model
 from solver.period_map import map_multipliers
 from solver.rotations import rotation_about
 from solver.section_wind import PeriodicWind
-from solver.sections import isotropic_section
+from solver.sections import SectionTable, isotropic_section
 from solver.symmetry import CyclicSymmetry
 from solver.system import System
 from solver.timefunctions import linear
@@ -290,6 +290,9 @@ FUSELAGE_GA = 1.0e9  # N
 FUSELAGE_GJ = 2.0e7  # N m2
 FUSELAGE_MASS = 10.0  # kg/m
 FUSELAGE_ELEMENTS = 2
+# The sections' rotary inertia i22 = i33 (kg m) and the shaft head's principal inertia (kg m2).
+FUSELAGE_SECTION_INERTIA = 1e-3
+SHAFT_INERTIA = (10.0, 10.0, 10.0)
 # First guess of the thrust coefficient: the Peters–He states start near the rotor's level
 # with it.
 THRUST_GUESS = 0.007
@@ -535,6 +538,29 @@ def design(p: Parameters) -> RotorDesign:
         lag_feedback=lag_feedback_gains(p))
 
 
+def fuselage_section(bending_stiffness: float) -> dict[str, float]:
+    """The fuselage-beam section's constants (:func:`solver.sections.isotropic_section`'s
+    keywords) for bending stiffness EI (N m², both planes)."""
+    return {"EA": FUSELAGE_EA, "GA2": FUSELAGE_GA, "GA3": FUSELAGE_GA, "GJ": FUSELAGE_GJ,
+            "EI2": bending_stiffness, "EI3": bending_stiffness, "mass": FUSELAGE_MASS,
+            "i22": FUSELAGE_SECTION_INERTIA, "i33": FUSELAGE_SECTION_INERTIA}
+
+
+def fuselage_beam(base: Body, length: float, section: SectionTable, shaft_mass: float,
+                  elements: int = FUSELAGE_ELEMENTS,
+                  shaft_inertia: tuple[float, float, float] = SHAFT_INERTIA,
+                  ) -> tuple[Beam, RigidBody, list[Rigid]]:
+    """The fuselage-beam along +z from z = −``length`` (m), clamped to ``base``, to the hub
+    centre at the origin (section axes d1 = z, d2 = x aft, d3 = y), and the shaft head (a rigid
+    body of ``shaft_mass`` kg) welded to its top. Returns the beam, the shaft head and the two
+    joints."""
+    fus = straight_beam("fuselage", (0.0, 0.0, -length), (0.0, 0.0, 0.0), section,
+                        n_elements=elements, e3=(0.0, 1.0, 0.0))
+    shaft = RigidBody("shaft", shaft_mass, inertia=shaft_inertia)
+    return fus, shaft, [Rigid("fuselage_clamp", base, fus.root),
+                        Rigid("shaft_mount", fus.tip, shaft)]
+
+
 def build(p: Parameters, d: RotorDesign | None = None, damping_factor: float = 1.0,
           feedback: bool = False, wake: RotorWake | None = None,
           controls: trim.ControlSchedule | None = None) -> tuple[Model, RotorParts]:
@@ -551,18 +577,11 @@ def build(p: Parameters, d: RotorDesign | None = None, damping_factor: float = 1
     g0 = ground()
     model = Model()
     # ---- fuselage-beam and shaft head (non-rotating)
-    length = p.fuselage_length
-    ei = d.bending_stiffness
-    section = isotropic_section(EA=FUSELAGE_EA, GA2=FUSELAGE_GA, GA3=FUSELAGE_GA,
-                                GJ=FUSELAGE_GJ, EI2=ei, EI3=ei, mass=FUSELAGE_MASS,
-                                i22=1e-3, i33=1e-3)
-    fus = straight_beam("fuselage", (0.0, 0.0, -length), (0.0, 0.0, 0.0), section,
-                        n_elements=FUSELAGE_ELEMENTS, e3=(0.0, 1.0, 0.0))
-    shaft = RigidBody("shaft", p.shaft_mass, inertia=(10.0, 10.0, 10.0))
+    fus, shaft, mounts = fuselage_beam(g0, p.fuselage_length,
+                                       isotropic_section(**fuselage_section(d.bending_stiffness)),
+                                       p.shaft_mass)
     c_fus = d.fuselage_damping
-    model.add(g0, fus, shaft,
-              Rigid("fuselage_clamp", g0, fus.root),
-              Rigid("shaft_mount", fus.tip, shaft),
+    model.add(g0, fus, shaft, *mounts,
               Spring("fuselage_damper", None, shaft, stiffness=np.zeros((3, 3)),
                      damping=np.diag([c_fus, c_fus, 0.0]) * damping_factor))
     # ---- hub

@@ -3,8 +3,9 @@
 
 Table 1's free case with the Peters–He inflow alone (the tuned bifilars make the time step's
 error largest: the notch's frequency error; with the prescribed wake the extrapolated harmonics
-are checked at 360 steps/rev by the wake convergence study, docs/inflow.md) is run three ways: at the default 240 steps/rev as archived (extrapolated),
-at 240 steps/rev without extrapolation (the raw harmonics and the estimate of their error),
+are checked at 360 steps/rev by the wake convergence study, docs/inflow.md) is run three
+ways: at the default 240 steps/rev as archived (extrapolated), at 240 steps/rev without
+extrapolation (the raw harmonics and the estimate of their error),
 and at 480 steps/rev, itself extrapolated (from 360), at a tenfold tighter periodicity. The
 reference's own step error is a sixteenth of the default's (h² at twice the step, then its
 extrapolation) and its periodicity error a tenth.
