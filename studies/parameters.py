@@ -295,7 +295,7 @@ class Parameters:
 
     model: ClassVar[str] = ""
     declarations: ClassVar[Mapping[str, Param]] = {}
-    cross_check: ClassVar[Callable[[Any], None] | None] = None
+    cross_check: ClassVar[Callable[[Any], Any] | None] = None
 
     def as_dict(self) -> dict[str, Any]:
         """Name -> value of every parameter, in declaration order (for archives and case
@@ -319,7 +319,7 @@ class Parameters:
                    for name, value in changes.items()}
         new = dataclasses.replace(self, **checked)
         if self.cross_check is not None:
-            self.cross_check(new)
+            new = self.cross_check(new) or new
         return new
 
     def __getitem__(self, name: str) -> Any:
@@ -339,7 +339,7 @@ _CLASSES: dict[tuple[str, tuple[tuple[str, Param], ...]], type[Parameters]] = {}
 
 
 def parameters_class(model: str, declarations: Mapping[str, Param],
-                     cross_check: Callable[[Any], None] | None = None) -> type[Parameters]:
+                     cross_check: Callable[[Any], Any] | None = None) -> type[Parameters]:
     """The frozen dataclass of ``model``'s parameters: one field per declaration, typed as
     its default (the same class for the same model and declarations)."""
     key = (model, tuple(declarations.items()))
@@ -363,7 +363,7 @@ def parameters_class(model: str, declarations: Mapping[str, Param],
 
 
 def _unpickle(model: str, declarations: Mapping[str, Param],
-              cross_check: Callable[[Any], None] | None,
+              cross_check: Callable[[Any], Any] | None,
               values: Mapping[str, Any]) -> Parameters:
     return parameters_class(model, declarations, cross_check)(**values)
 
@@ -385,7 +385,10 @@ class ModelSpec:
     check
         ``check(p)`` raises :class:`ParameterError` for combinations that are individually
         valid but physically impossible (e.g. a pin wider than its hole); it runs once, in
-        :meth:`validate`, before any case.
+        :meth:`validate`, before any case. It may return the parameters completed with
+        derived values (e.g. the digest of a file a parameter names, so that the case id
+        follows the file's content), which :meth:`validate` then returns; ``None`` keeps
+        them.
     description
         One line on what the model is.
     extra
@@ -413,7 +416,7 @@ class ModelSpec:
     name: str
     parameters: Mapping[str, Param]
     simulate: Callable[[Any], xr.Dataset]
-    check: Callable[[Any], None] | None = None
+    check: Callable[[Any], Any] | None = None
     description: str = ""
     extra: dict[str, Any] = field(default_factory=dict)
     outputs: Mapping[str, Output] = field(default_factory=dict)
@@ -467,7 +470,9 @@ class ModelSpec:
             values[name] = self.parameters[name].check(name, value)
         p = cls(**values)
         if self.check is not None:
-            self.check(p)
+            # the cross-check may complete the parameters with derived values (e.g. the hash
+            # of a file a parameter names), returning them
+            p = self.check(p) or p
         return p
 
     def complete(self, given: Mapping[str, Any]) -> dict[str, Any]:

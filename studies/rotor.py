@@ -64,11 +64,14 @@ response's largest Floquet multiplier is found by Arnoldi on the quarter-revolut
 
 from __future__ import annotations
 
+import dataclasses
+import hashlib
 import math
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass
 from functools import partial
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -82,6 +85,7 @@ from solver.inflow import DynamicInflow
 from solver.integrators import Integrator, make_integrator
 from solver.joints import Revolute, Rigid
 from solver.lifting_line import LiftingLine
+from solver.modal import ModalAttachment, ModalStructure
 from solver.model import Model
 from solver.period_map import map_multipliers
 from solver.rotations import rotation_about
@@ -96,6 +100,7 @@ from studies import periodic, rotor_wake, trim
 from studies.absorbers import N_BIFILARS, AbsorberProbe, add_absorbers, holes_for, pin_damping
 from studies.absorbers import OUTPUTS as ABSORBER_OUTPUTS
 from studies.absorbers import PARAMETERS as ABSORBERS
+from studies.airframe import DIRECTIONS, Airframe, default_airframe_path, read_airframe
 from studies.bifilar import BifilarParts
 from studies.bifilar import compile_kernels as compile_bifilar
 from studies.equivalent import EquivalentParts
@@ -115,6 +120,7 @@ from studies.uh60a import (
 )
 
 Z = np.array([0.0, 0.0, 1.0])
+G0 = 9.80665  # m s-2, standard gravity: the unit g of the pilot seat's vibration
 N_BLADES = 4
 FT = 0.3048  # m
 # Newton's tolerance on the updates of q, relative to q's scale (its largest coordinate, a
@@ -243,6 +249,17 @@ PARAMETERS: dict[str, Param] = {
                                               "stiffness EI", minimum=0.01, maximum=100.0),
     "fuselage_damping_ratio": Param(0.02, "1", "damping ratio of the nominal in-plane fuselage "
                                     "mode", minimum=0.0, maximum=1.0),
+    "fuselage": Param("beam", "1", "airframe under the rotor: beam (the paper's clamped "
+                      "fuselage-beam carrying the shaft head) or modal (a free airframe given by "
+                      "its normal modes in the file fuselage_modes, the hub attached at its hub "
+                      "point through the modal coordinates)", choices=("beam", "modal")),
+    "fuselage_modes": Param("", "1", "modal airframe file (TOML, format in studies/airframe.py) "
+                            "used with fuselage = modal; empty: the shipped UH-60A-class file "
+                            "studies/data/uh60a_airframe.toml"),
+    "fuselage_modes_sha256": Param("", "1", "derived, filled in by validation (a given value "
+                                   "is replaced): SHA-256 of the fuselage_modes file's content "
+                                   "with fuselage = modal (empty with beam), so that a case's "
+                                   "id follows the file's content, not only its path"),
     "scheme": Param("galpha", "1", "time integration scheme", choices=("galpha", "ed", "ep")),
     "rho_inf": Param(0.5, "1", "high-frequency spectral radius of the galpha scheme (ed decays "
                      "by construction with ρ∞ = 0; ep conserves)", minimum=0.0, maximum=1.0),
@@ -293,6 +310,14 @@ FUSELAGE_ELEMENTS = 2
 # The sections' rotary inertia i22 = i33 (kg m) and the shaft head's principal inertia (kg m2).
 FUSELAGE_SECTION_INERTIA = 1e-3
 SHAFT_INERTIA = (10.0, 10.0, 10.0)
+# The shaft head on a modal airframe has no mass (the airframe file carries it) but a unit
+# principal inertia (kg m2): with none, its orientation is fixed by constraint rows alone and
+# the Newton matrix's pivots fell below the singularity threshold (5e-17 of the largest on the
+# shipped file, 7e-14 on the fuselage-beam's modes) after some revolutions; the hub's polar
+# inertia is a unit value for the same reason. It adds 1 kg m2 to the airframe at the hub
+# (the shipped file's roll inertia is 6,317 kg m2; beam_airframe(tip_inertia = SHAFT_INERTIA
+# less it) keeps the beam's sum exact).
+MODAL_SHAFT_INERTIA = (1.0, 1.0, 1.0)
 # First guess of the thrust coefficient: the Peters–He states start near the rotor's level
 # with it.
 THRUST_GUESS = 0.007
@@ -300,12 +325,27 @@ THRUST_GUESS = 0.007
 # The absorbers' hub-level outputs (studies.absorbers), and the rotor's own.
 OUTPUTS: dict[str, Output] = {
     **ABSORBER_OUTPUTS,
-    "hub_force_z_fixed": Output("N", "vertical force transmitted to the fuselage-beam",
+    "hub_force_z_fixed": Output("N", "vertical force transmitted to the fuselage-beam (modal "
+                                "airframe: to the airframe at its hub point)",
                                 history=True, harmonics=True),
-    "fuselage_moment_x_fixed": Output("N m", "fuselage-beam root bending moment about x (M11)",
+    "fuselage_moment_x_fixed": Output("N m", "fuselage-beam root bending moment about x (M11); "
+                                      "NaN with a modal airframe (no beam)",
                                       history=True, figure="fuselage_moments"),
-    "fuselage_moment_y_fixed": Output("N m", "fuselage-beam root bending moment about y (M22)",
+    "fuselage_moment_y_fixed": Output("N m", "fuselage-beam root bending moment about y (M22); "
+                                      "NaN with a modal airframe (no beam)",
                                       history=True, figure="fuselage_moments"),
+    "station": Output("1", "response station of the modal airframe file (none with the "
+                      "fuselage-beam)", dims=("station",)),
+    "axis": Output("1", "direction of a station's acceleration, model axes (x aft, y "
+                   "starboard, z up)", dims=("axis",)),
+    "station_acceleration": Output(
+        "m s-2", "acceleration Φ_s η̈ of each response station of the modal airframe, model "
+        "axes (the station dimension is empty with the fuselage-beam)",
+        dims=("station", "axis", "time"), history=True, harmonics=True),
+    "pilot_seat_vibration_4p": Output(
+        "1", "4P vibration at the station pilot_seat in g (9.80665 m s-2): the magnitude of "
+        "the 4P harmonic of its acceleration vector, sqrt(Σ over x, y, z of the 4P "
+        "amplitude²); NaN with the fuselage-beam or without that station", dims=()),
     "thrust": Output("N", "rotor thrust (aerodynamic, along the shaft)", history=True,
                      harmonics=True),
     "mean_inflow": Output("1", "mean induced inflow ratio λ0: of the Peters–He states, or with "
@@ -381,7 +421,7 @@ class RotorParts:
 
     hub: RigidBody
     shaft: RigidBody
-    fuselage: Beam
+    fuselage: Beam | None  # None with a modal airframe
     blades: list[Beam]
     lines: list[LiftingLine]
     inflow: DynamicInflow
@@ -390,6 +430,10 @@ class RotorParts:
     fuselage_stiffness: float
     fuselage_damping: float
     wake: RotorWake | None = None
+    # the modal airframe (fuselage = "modal"), its modal coordinates and the hub attachment
+    airframe: Airframe | None = None
+    modal: ModalStructure | None = None
+    attachment: ModalAttachment | None = None
 
 
 def lag_feedback_gains(p: Parameters) -> tuple[float, float, float]:
@@ -508,6 +552,8 @@ class RotorDesign:
     lag_feedback
         Delay τ (s), stiffness a (N·m/rad) and damping b (N·m·s/rad) of the delayed lag
         feedback (:func:`lag_feedback_gains`).
+    airframe
+        The modal airframe read from ``fuselage_modes`` (``fuselage = "modal"``), else None.
     """
 
     holes: Holes
@@ -516,6 +562,7 @@ class RotorDesign:
     fuselage_damping: float
     pin_damping: float
     lag_feedback: tuple[float, float, float]
+    airframe: Airframe | None = None
 
 
 def design(p: Parameters) -> RotorDesign:
@@ -535,7 +582,8 @@ def design(p: Parameters) -> RotorDesign:
         fuselage_stiffness=k_nom * p.fuselage_bending_stiffness_scale,
         fuselage_damping=2.0 * p.fuselage_damping_ratio * math.sqrt(k_nom * m_top),
         pin_damping=pin_damping(p, holes),
-        lag_feedback=lag_feedback_gains(p))
+        lag_feedback=lag_feedback_gains(p),
+        airframe=read_case_airframe(p)[0] if p.fuselage == "modal" else None)
 
 
 def fuselage_section(bending_stiffness: float) -> dict[str, float]:
@@ -576,14 +624,27 @@ def build(p: Parameters, d: RotorDesign | None = None, damping_factor: float = 1
     holes = d.holes
     g0 = ground()
     model = Model()
-    # ---- fuselage-beam and shaft head (non-rotating)
-    fus, shaft, mounts = fuselage_beam(g0, p.fuselage_length,
-                                       isotropic_section(**fuselage_section(d.bending_stiffness)),
-                                       p.shaft_mass)
-    c_fus = d.fuselage_damping
-    model.add(g0, fus, shaft, *mounts,
-              Spring("fuselage_damper", None, shaft, stiffness=np.zeros((3, 3)),
-                     damping=np.diag([c_fus, c_fus, 0.0]) * damping_factor))
+    modal = attachment = None
+    if d.airframe is None:
+        # ---- fuselage-beam and shaft head (non-rotating)
+        fus, shaft, mounts = fuselage_beam(
+            g0, p.fuselage_length, isotropic_section(**fuselage_section(d.bending_stiffness)),
+            p.shaft_mass)
+        c_fus = d.fuselage_damping
+        model.add(g0, fus, shaft, *mounts,
+                  Spring("fuselage_damper", None, shaft, stiffness=np.zeros((3, 3)),
+                         damping=np.diag([c_fus, c_fus, 0.0]) * damping_factor))
+    else:
+        # ---- modal airframe: a massless shaft head at the hub centre (the file's modes carry
+        # the shaft head and gearbox), its position and small rotation following the hub
+        # point's shapes Φ_t η, Φ_r η; the modal damping replaces the fuselage damper, and
+        # nothing is clamped (the file's rigid-body modes have their own suspension)
+        fus, c_fus = None, 0.0
+        shaft = RigidBody("shaft", 0.0, inertia=MODAL_SHAFT_INERTIA)
+        airframe = conditioned_airframe(d.airframe, 2 * np.pi / omega / p.steps_per_rev,
+                                        p.hub_mass)
+        modal, attachment = airframe.elements(shaft, point=np.zeros(3))
+        model.add(g0, shaft, modal, attachment)
     # ---- hub
     hub = RigidBody("hub", p.hub_mass,
                     inertia=(p.hub_tilt_inertia, p.hub_tilt_inertia, 1.0),
@@ -615,7 +676,25 @@ def build(p: Parameters, d: RotorDesign | None = None, damping_factor: float = 1
     absorbers = add_absorbers(model, hub, shaft, holes, p, d.pin_damping,
                               tuning_speed=p.equivalent_tuning_speed)
     return model, RotorParts(hub, shaft, fus, blades, lines, inflow, absorbers, holes,
-                             d.fuselage_stiffness, c_fus, wake)
+                             d.fuselage_stiffness, c_fus, wake, d.airframe, modal, attachment)
+
+
+def conditioned_airframe(airframe: Airframe, h: float, reference_mass: float) -> Airframe:
+    """``airframe`` with each mode's shapes scaled for a well-conditioned Newton matrix.
+
+    Scaling mode i's shapes by s_i scales its generalized mass by s_i² and its η by 1/s_i: the
+    physics (the hub's and the stations' motion) is unchanged. A mode's row of the Newton
+    matrix weighs about m_i (4/h² + ω_i²) (time step h, s); s_i makes that m_ref 4/h² (m_ref =
+    ``reference_mass``, kg: the hub's), as for the rotor's own bodies. With the file's scaling
+    (unit hub translation) the modal stiffnesses m_i ω_i² reach 1.7e13 N/m (the fuselage-beam's
+    3 kHz modes) and the shipped file's generalized masses 5e4 kg, and the Newton matrix's
+    smallest pivots fell below the singularity threshold (1e-13 of the largest) within
+    revolutions of the rotor's run."""
+    weight = airframe.masses * (1.0 + (2 * np.pi * airframe.frequencies * h / 2.0) ** 2)
+    scale = np.sqrt(reference_mass / weight)
+    return dataclasses.replace(airframe, masses=airframe.masses * scale**2,
+                               hub_shapes=airframe.hub_shapes * scale,
+                               station_shapes=airframe.station_shapes * scale)
 
 
 def new_wake(p: Parameters, line: LiftingLine) -> RotorWake:
@@ -659,7 +738,8 @@ _BLADE_COLUMNS = ("v3", "v2", "n1", "t1", "flap")
 
 class _Sampler:
     """One row of outputs at the integrator's current state (fixed column layout: the
-    :data:`COLUMNS`, then the pin angles).
+    :data:`COLUMNS`, then the pin angles, then with a modal airframe the stations'
+    accelerations Φ_s η̈, m s-2, station by station x, y, z).
 
     The blade root loads and flap angle are blade 0's, followed by the other blades' (columns
     ``v3_1`` … ``flap_3``): the quarter-revolution map turns blade k into blade k + 1, so a
@@ -678,7 +758,10 @@ class _Sampler:
         self.parts = parts
         self.record_wake = record_wake
         self.line_set = _line_set(system, parts.lines[0])
-        self.root = SectionProbe(parts.fuselage, [0.0, parts.fuselage.length])
+        self.modal = parts.airframe is not None
+        if not self.modal:
+            self.root = SectionProbe(parts.fuselage, [0.0, parts.fuselage.length])
+            self.o_top = system.offset[parts.fuselage.tip]
         # each blade's root loads from its pitch bearing's reaction (its Lagrange
         # multipliers): the discrete system's exact equilibrium, converged with 6 elements to
         # 2 % where the beam's own strains at the root (SectionProbe) need more than 14
@@ -692,7 +775,6 @@ class _Sampler:
         self.o_inflow = system.offset[parts.inflow]
         self.o_blade_tip = system.offset[parts.blades[0].tip]
         self.absorbers = AbsorberProbe(system, parts.absorbers, parts.hub)
-        self.o_top = system.offset[parts.fuselage.tip]
 
     def blade(self, integ, k: int) -> tuple[float, float, float, float, float]:
         """Blade k's root shears (flapwise v3, chordwise v2), axial force n1 and torsion t1,
@@ -713,15 +795,30 @@ class _Sampler:
     def __call__(self, integ) -> np.ndarray:
         s, q, v, parts = self.s, integ.q, integ.v, self.parts
         x = q[self.o_shaft : self.o_shaft + 3]
-        loads = self.root(s, q)  # (2, 6): root and top, section frame d1 = z, d2 = x, d3 = y
-        # force the top section passes down the fuselage-beam, from material to fixed axes
-        d = q[self.o_top + 3 : self.o_top + 12].reshape(3, 3)  # rows: d1, d2, d3
-        f_top = loads[1, :3] @ d
-        # and the moment it passes down at the hub centre (the beam's top), likewise: the
-        # stress resultant at the top is the load of the shaft head (and the rotor above it)
-        # on the beam
-        m_top = loads[1, 3:6] @ d
-        m11, m22 = loads[0, 4], loads[0, 5]
+        stations: np.ndarray = np.zeros(0)
+        if self.modal:
+            # the attachment's reaction is the airframe's force and moment (about the hub
+            # point) on the massless shaft head: the rotor passes their opposite to the
+            # airframe, as the beam's top section passes the shaft head's load down the beam
+            force, moment = s.reaction(parts.attachment, q, integ.lam, integ.t)
+            f_top, m_top = -force, -moment
+            m11 = m22 = 0.0  # no fuselage-beam (NaN in the outputs)
+            # η̈: the scheme's own (galpha's q̈ satisfies the discrete equations of motion at
+            # the step's end), else the equations of motion solved at the state (ep)
+            source = "scheme" if getattr(integ, "qdd", None) is not None else "equations"
+            _, _, eta_dd = parts.modal.modal_state(integ, source)
+            stations = parts.airframe.station_accelerations(eta_dd).ravel()
+        else:
+            loads = self.root(s, q)  # (2, 6): root and top, section frame d1 = z, d2 = x,
+            # d3 = y; force the top section passes down the fuselage-beam, from material to
+            # fixed axes
+            d = q[self.o_top + 3 : self.o_top + 12].reshape(3, 3)  # rows: d1, d2, d3
+            f_top = loads[1, :3] @ d
+            # and the moment it passes down at the hub centre (the beam's top), likewise: the
+            # stress resultant at the top is the load of the shaft head (and the rotor above
+            # it) on the beam
+            m_top = loads[1, 3:6] @ d
+            m11, m22 = loads[0, 4], loads[0, 5]
         cm, phis = self.absorbers(q, integ.t)
         acc = getattr(integ, "qdd", None)
         air = self.line_set.airloads(q, v, np.zeros_like(q) if acc is None else acc, integ.t)
@@ -744,7 +841,7 @@ class _Sampler:
         torque = drive @ q[self.o_shaft + 9 : self.o_shaft + 12]
         return np.array([integ.t, x[0], x[1], f_top[0], f_top[1], f_top[2], m11, m22,
                          cm[0], cm[1], thrust, lam0, v3, v2, n1, t1, m_top[0], m_top[1],
-                         torque, flap, *others, *np.degrees(phis)])
+                         torque, flap, *others, *np.degrees(phis), *stations])
 
 
 # each blade's columns of _Sampler's rows (rows of the index: blades 0 … 3), and the pins'
@@ -1058,6 +1155,14 @@ def simulate(p: Parameters) -> xr.Dataset:
     flown = controls.controls
     deg = (np.degrees(flown) if trimmer is not None
            else (p.collective, p.cyclic_cosine, p.cyclic_sine, p.shaft_tilt))
+    nan_series = np.full_like(t, np.nan)
+    # the stations' accelerations (station, axis, time); none with the fuselage-beam
+    station_names = () if parts.airframe is None else parts.airframe.station_names
+    accel = data[:, _PINS.stop :].reshape(len(t), len(station_names), 3).transpose(1, 2, 0)
+    pilot = float("nan")
+    if "pilot_seat" in station_names:
+        seat = harmonics(accel[station_names.index("pilot_seat")], nrev, p.revolutions, 4)
+        pilot = float(np.linalg.norm(seat.amplitude[:, 4])) / G0
     series = {
         "time": t,
         "bifilar": np.arange(N_BIFILARS),
@@ -1068,11 +1173,14 @@ def simulate(p: Parameters) -> xr.Dataset:
         "hub_force_x_fixed": col["fx"],
         "hub_force_y_fixed": col["fy"],
         "hub_force_z_fixed": col["fz"],
-        "fuselage_moment_x_fixed": col["m11"],
-        "fuselage_moment_y_fixed": col["m22"],
+        "fuselage_moment_x_fixed": col["m11"] if parts.airframe is None else nan_series,
+        "fuselage_moment_y_fixed": col["m22"] if parts.airframe is None else nan_series,
         "bifilar_cm_x_fixed": col["cmx"],
         "bifilar_cm_y_fixed": col["cmy"],
         "pin_angle": data[:, _PINS].T,
+        "station": np.array(station_names, dtype=str),
+        "axis": np.array(DIRECTIONS),
+        "station_acceleration": accel,
         "thrust": col["thrust"],
         "mean_inflow": col["lam0"],
         "blade_root_shear_flap": col["v3"],
@@ -1120,11 +1228,14 @@ def simulate(p: Parameters) -> xr.Dataset:
         "rotor_power": np.float64(col["torque"].mean() * omega),
         "flapping_cosine": np.float64(flap.cos[1]),
         "flapping_sine": np.float64(flap.sin[1]),
+        "pilot_seat_vibration_4p": np.float64(pilot),
     }
     note = "; ".join(filter(None, [rec.note, None if est is None else est.note, floquet_note,
                                    wake_note]))
     if trimmer is not None:
         note = "; ".join(filter(None, [note, f"trimmed in {trimmer.updates} control updates"]))
+    if math.isfinite(pilot):
+        note = "; ".join(filter(None, [note, f"pilot-seat 4P vibration {pilot:.3g} g"]))
     ds = SPEC.dataset({**series, **facts}, {"message": note})
     return ds
 
@@ -1206,7 +1317,42 @@ def compile_kernels(steps: int = 3) -> None:
     induced_velocity(np.zeros((1, 3)), np.zeros((1, 3)), np.ones((1, 3)), 1.0, 0.1)
 
 
-def _check(p: Parameters) -> None:
+def airframe_path(p: Parameters) -> Path:
+    """The modal airframe file of case ``p``: ``fuselage_modes``, or the shipped one."""
+    return Path(p.fuselage_modes) if p.fuselage_modes else default_airframe_path()
+
+
+def read_case_airframe(p: Parameters) -> tuple[Airframe, str]:
+    """The modal airframe of case ``p`` (``fuselage = "modal"``) and the SHA-256 of its file.
+
+    Raises
+    ------
+    ParameterError
+        Naming ``fuselage_modes`` with :func:`studies.airframe.read_airframe`'s message, for a
+        missing or invalid file; or if the file's content is not the one the parameters were
+        validated with (``fuselage_modes_sha256``: the file changed after validation).
+    """
+    path = airframe_path(p)
+    try:
+        digest = hashlib.sha256(path.read_bytes()).hexdigest()
+        airframe = read_airframe(path)
+    except FileNotFoundError:
+        raise ParameterError(f"fuselage_modes = {p.fuselage_modes!r}: airframe file not "
+                             f"found: {path}") from None
+    except OSError as exc:
+        raise ParameterError(f"fuselage_modes = {p.fuselage_modes!r}: cannot read airframe "
+                             f"file {path}: {exc}") from exc
+    except ParameterError as exc:
+        raise ParameterError(f"fuselage_modes = {p.fuselage_modes!r}: {exc}") from None
+    if p.fuselage_modes_sha256 and p.fuselage_modes_sha256 != digest:
+        raise ParameterError(f"fuselage_modes = {p.fuselage_modes!r}: the file {path} changed "
+                             "after the parameters were validated (SHA-256 "
+                             f"{digest[:12]}…, validated {p.fuselage_modes_sha256[:12]}…); "
+                             "validate them again")
+    return airframe, digest
+
+
+def _check(p: Parameters) -> Parameters:
     periodic.check(p)
     trim.check(p)
     holes_for(p)
@@ -1214,11 +1360,18 @@ def _check(p: Parameters) -> None:
         raise ParameterError(f"steps_per_rev = {p.steps_per_rev}: must be a multiple of "
                              f"{N_BLADES} for shooting on the quarter-revolution map (or set "
                              "shooting_window = 0 to march)")
+    # the modal airframe's file is read and checked here, before any case runs, and its
+    # content's digest becomes a parameter: the case id (a hash of the parameters) then
+    # changes with the file, so a sweep never reuses results of an edited file at one path
+    digest = ""
+    if p.fuselage == "modal":
+        _, digest = read_case_airframe(dataclasses.replace(p, fuselage_modes_sha256=""))
+    return dataclasses.replace(p, fuselage_modes_sha256=digest)
 
 
 SPEC = ModelSpec("rotor", PARAMETERS, simulate, _check,
                  description="four-bladed elastic UH-60 rotor with aerodynamics and four "
                              "bifilars on a fuselage-beam",
-                 outputs=OUTPUTS, version="9",
+                 outputs=OUTPUTS, version="10",
                  # the two parts take about as long to compile (curve joints / the rest)
                  warm_up=(partial(compile_bifilar, "galpha"), compile_kernels))
