@@ -331,23 +331,26 @@ OUTPUTS: dict[str, Output] = {
                                 "airframe: to the airframe at its hub point)",
                                 history=True, harmonics=True),
     "fuselage_moment_x_fixed": Output("N m", "fuselage-beam root bending moment about x (M11); "
-                                      "NaN with a modal airframe (no beam)",
+                                      "absent with a modal airframe (no beam: NaN in an "
+                                      "archive)",
                                       history=True, figure="fuselage_moments"),
     "fuselage_moment_y_fixed": Output("N m", "fuselage-beam root bending moment about y (M22); "
-                                      "NaN with a modal airframe (no beam)",
+                                      "absent with a modal airframe (no beam: NaN in an "
+                                      "archive)",
                                       history=True, figure="fuselage_moments"),
-    "station": Output("1", "response station of the modal airframe file (none with the "
+    "station": Output("1", "response station of the modal airframe file (absent with the "
                       "fuselage-beam)", dims=("station",)),
     "axis": Output("1", "direction of a station's acceleration, model axes (x aft, y "
                    "starboard, z up)", dims=("axis",)),
     "station_acceleration": Output(
         "m s-2", "acceleration Φ_s η̈ of each response station of the modal airframe, model "
-        "axes (the station dimension is empty with the fuselage-beam)",
+        "axes (absent with the fuselage-beam: NaN in an archive)",
         dims=("station", "axis", "time"), history=True, harmonics=True),
     "pilot_seat_vibration_4p": Output(
         "1", "4P vibration at the station pilot_seat in g (9.80665 m s-2): the magnitude of "
         "the 4P harmonic of its acceleration vector, sqrt(Σ over x, y, z of the 4P "
-        "amplitude²); NaN with the fuselage-beam or without that station", dims=()),
+        "amplitude²); absent with the fuselage-beam or without that station", dims=(),
+        optional=True),
     "thrust": Output("N", "rotor thrust (aerodynamic, along the shaft)", history=True,
                      harmonics=True),
     "mean_inflow": Output("1", "mean induced inflow ratio λ0: of the Peters–He states, or with "
@@ -1157,7 +1160,6 @@ def simulate(p: Parameters) -> xr.Dataset:
     flown = controls.controls
     deg = (np.degrees(flown) if trimmer is not None
            else (p.collective, p.cyclic_cosine, p.cyclic_sine, p.shaft_tilt))
-    nan_series = np.full_like(t, np.nan)
     # the stations' accelerations (station, axis, time); none with the fuselage-beam
     station_names = () if parts.airframe is None else parts.airframe.station_names
     accel = data[:, _PINS.stop :].reshape(len(t), len(station_names), 3).transpose(1, 2, 0)
@@ -1175,8 +1177,8 @@ def simulate(p: Parameters) -> xr.Dataset:
         "hub_force_x_fixed": col["fx"],
         "hub_force_y_fixed": col["fy"],
         "hub_force_z_fixed": col["fz"],
-        "fuselage_moment_x_fixed": col["m11"] if parts.airframe is None else nan_series,
-        "fuselage_moment_y_fixed": col["m22"] if parts.airframe is None else nan_series,
+        "fuselage_moment_x_fixed": col["m11"],
+        "fuselage_moment_y_fixed": col["m22"],
         "bifilar_cm_x_fixed": col["cmx"],
         "bifilar_cm_y_fixed": col["cmy"],
         "pin_angle": data[:, _PINS].T,
@@ -1230,7 +1232,7 @@ def simulate(p: Parameters) -> xr.Dataset:
         "rotor_power": np.float64(col["torque"].mean() * omega),
         "flapping_cosine": np.float64(flap.cos[1]),
         "flapping_sine": np.float64(flap.sin[1]),
-        "pilot_seat_vibration_4p": np.float64(pilot),
+        **({"pilot_seat_vibration_4p": np.float64(pilot)} if math.isfinite(pilot) else {}),
     }
     note = "; ".join(filter(None, [rec.note, None if est is None else est.note, floquet_note,
                                    wake_note]))
@@ -1238,8 +1240,16 @@ def simulate(p: Parameters) -> xr.Dataset:
         note = "; ".join(filter(None, [note, f"trimmed in {trimmer.updates} control updates"]))
     if math.isfinite(pilot):
         note = "; ".join(filter(None, [note, f"pilot-seat 4P vibration {pilot:.3g} g"]))
-    ds = SPEC.dataset({**series, **facts}, {"message": note})
-    return ds
+    # what one airframe has and the other not is left out (a sweep's archive holds NaN for
+    # it): a modal airframe has no fuselage-beam moments, the beam no stations
+    absent = ({"fuselage_moment_x_fixed", "fuselage_moment_y_fixed"} if parts.airframe
+              is not None else {"station", "axis", "station_acceleration"})
+    values = {k: v for k, v in {**series, **facts}.items() if k not in absent}
+    missing = [k for k, o in OUTPUTS.items() if k not in values and k not in absent
+               and not o.optional and not o.is_vector]
+    if missing:
+        raise RuntimeError(f"rotor outputs not filled: {', '.join(missing)}")
+    return SPEC.dataset(values, {"message": note}, partial=True)
 
 
 def _multipliers(p: Parameters, integ, system: System, parts: RotorParts
