@@ -174,7 +174,8 @@ def test_shipped_airframe_runs_and_archives_the_stations():
     _Probe.booked = []
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr(rotor, "_Sampler", _Probe)
-        ds = rotor.run({**COARSE, "bifilar": "locked", "fuselage": "modal"})
+        ds = rotor.run({**COARSE, "bifilar": "locked", "fuselage": "modal",
+                        "extrapolation_window": 0})
     assert float(ds.run_periodicity_change) <= COARSE["periodic_tolerance"]
     assert ds.station_acceleration.dims == ("station", "axis", "time")
     assert list(ds.station.values) == list(af.station_names)
@@ -188,11 +189,146 @@ def test_shipped_airframe_runs_and_archives_the_stations():
     assert f"pilot-seat 4P vibration {g:.3g} g" in ds.attrs["message"]
     # the independent check, from the booked η of the recorded revolution (the model's η is
     # that of the conditioned shapes: the booked displacement is in the model's scaling)
-    # (the rows at the recorded times: the last booked at each, as the record is the last
-    # revolution marched at those times)
+    # (the last booked row at each recorded azimuth: on the periodic response the booked
+    # revolution after the record repeats it, to the periodicity tolerance)
     rows = np.array(_Probe.booked)
-    pick = [int(np.flatnonzero(np.abs(rows[:, 0] - t) < 1e-9)[-1]) for t in ds.time.values]
-    booked = rows[pick]
+    step = 2 * np.pi / float(ds.run_hub_speed) / nrev
+    k = (rows[:, 0] - float(ds.time[0])) / step
+    whole = np.abs(k - np.round(k)) < 1e-6
+    index = np.mod(np.round(k), nrev)
+    booked = rows[[int(np.flatnonzero(whole & (index == j))[-1]) for j in range(nrev)]]
+    p = rotor.SPEC.validate({**COARSE, "fuselage": "modal"})
+    model, parts = rotor.build(p)
+    system = System(model)
+    sym = rotor.symmetry(system, parts)
+    idx = parts.modal.indices(system)
+    rng = np.random.default_rng(0)
+    q = rng.standard_normal(system.n)
+    v = rng.standard_normal(system.n)
+    qb, vb = sym.back(q, v)
+    np.testing.assert_array_equal(qb[idx], q[idx])
+    np.testing.assert_array_equal(vb[idx], v[idx])
+    assert parts.fuselage is None and parts.fuselage_damping == 0.0
+
+
+def _force_4p(ds, axis: str) -> complex:
+    h = harmonics(ds[f"hub_force_{axis}_fixed"].values, int(ds.run_samples_per_rev), 1, 4)
+    return complex(h.cos[4], h.sin[4])
+
+
+def _hub_acceleration_4p(ds, axis: str) -> complex:
+    omega = float(ds.run_hub_speed)
+    h = harmonics(ds[f"hub_{axis}_fixed"].values, int(ds.run_samples_per_rev), 1, 4)
+    return -((4 * omega) ** 2) * complex(h.cos[4], h.sin[4])
+
+
+@pytest.mark.slow
+def test_beam_modes_reproduce_the_beam_hub_force(tmp_path):
+    """The locked case on the fuselage-beam and on the beam's 10 modes up to 3 kHz (truncation
+    of the coupled frequencies 9.3e-10, tests/studies/test_airframe.py).
+
+    Damping: the beam's in-plane damper c on the shaft head is, in modal coordinates, the
+    matrix c Φ_tᵀ Φ_t (in-plane rows); each mode gets its diagonal, ζ_i = c |Φ_t,i|² / (2 m_i
+    ω_i) (3.2 % on the first bending pair, below 3e-5 above). The off-diagonal terms left out
+    couple the first pair to modes above 1 kHz, whose response at 4P is quasi-static and
+    tiny. The shaft head: the file carries its 300 kg and 9 kg m² of its inertia, the rotor's
+    massless shaft head the unit inertia MODAL_SHAFT_INERTIA (sum 10, the beam's).
+
+    The cut: the beam's hub force is its top section's, below the shaft head and its damper;
+    the modal model's is the rotor's load on the airframe at the hub point, above the shaft
+    head (part of the airframe, its damping inside the modes). They differ by the shaft
+    head's inertia force m_s ẍ_hub (480 N at 4P here, as large as the force itself) and the
+    damper's force c ẋ_hub (40 N), which are taken off the modal one before comparing.
+
+    Measured: the 4P hub acceleration 1.4 % apart, the 4P hub force 2.6 % (x and y); the
+    same at periodicity tolerances 1e-3 and 1e-5 (neither is the periodicity's), the means
+    within 1e-4. The modal model is linear about the unloaded beam: the beam carries the
+    rotor's 113 kN thrust in compression (1.2 % of its buckling load π²EI/(4L²), softening
+    its bending by about that much), which the modes leave out; the coupled fuselage mode
+    (15.8 Hz) near 4P (17.2 Hz) amplifies such differences (the likely cause, not isolated).
+    """
+    p0 = rotor.SPEC.validate({})
+    c = rotor.design(p0).fuselage_damping
+    shaft_inertia = np.array(rotor.SHAFT_INERTIA) - np.array(rotor.MODAL_SHAFT_INERTIA)
+    af = beam_airframe(damping_ratio=0.0, tip_inertia=shaft_inertia)
+    zeta = c * (af.hub_shapes[0] ** 2 + af.hub_shapes[1] ** 2) / (
+        2 * af.masses * 2 * np.pi * af.frequencies)
+    fields = {f.name: getattr(af, f.name) for f in dataclasses.fields(Airframe)}
+    path = write_airframe(Airframe(**{**fields, "damping_ratios": zeta}), tmp_path / "b.toml")
+    case = {**COARSE, "bifilar": "locked", "periodic_tolerance": TOLERANCE}
+    beam = rotor.run(case)
+    modal = rotor.run({**case, "fuselage": "modal", "fuselage_modes": str(path)})
+    assert "fuselage_moment_x_fixed" not in modal and "fuselage_moment_y_fixed" not in modal
+    assert modal.sizes["station"] == 0 and "pilot_seat_vibration_4p" not in modal
+    assert "station_acceleration" not in beam and "pilot_seat_vibration_4p" not in beam
+    m_shaft = p0.shaft_mass
+    omega = float(modal.run_hub_speed)
+    for axis in ("x", "y"):
+        ab, am = _hub_acceleration_4p(beam, axis), _hub_acceleration_4p(modal, axis)
+        assert abs(am - ab) < MOTION_AGREEMENT * abs(ab), (axis, ab, am)
+        # ẋ's 4P harmonic is ẍ's over i 4Ω
+        fb = _force_4p(beam, axis)
+        fm = _force_4p(modal, axis) - m_shaft * am - c * am / (1j * 4 * omega)
+        assert abs(fm - fb) < FORCE_AGREEMENT * abs(fb), (axis, fb, fm)
+    # the mean (thrust and in-plane) and the moments need no correction
+    for key in ("hub_force_z_fixed", "hub_force_x_fixed"):
+        assert abs(float(modal[key].mean()) / float(beam[key].mean()) - 1) < 2e-3
+
+
+# The equivalence's periodicity tolerance and agreements (measured 1.4 % and 2.6 %: see the
+# test's docstring)
+TOLERANCE = 1e-3
+MOTION_AGREEMENT = 0.025
+FORCE_AGREEMENT = 0.04
+
+
+class _Probe(rotor._Sampler):
+    """The case's sampler, also booking the modal coordinates η at each sample."""
+
+    booked: ClassVar[list[np.ndarray]] = []
+
+    def __call__(self, integ) -> np.ndarray:
+        row = super().__call__(integ)
+        eta = integ.q[self.parts.modal.indices(self.s)]
+        self.booked.append(np.concatenate([[integ.t], eta]))
+        return row
+
+
+@pytest.mark.slow
+def test_shipped_airframe_runs_and_archives_the_stations():
+    """Locked bifilars on the shipped airframe: periodic, every station's acceleration
+    archived; its 4P harmonic checked independently against −(4Ω)² times the 4P harmonic of
+    the stations' displacement Φ_s η from the booked modal coordinates (the scheme's own η̈
+    against the spectral second derivative of η: their difference is the scheme's error at
+    4P, (ωh)²/12 = 0.4 % at 120 steps/rev, and the shapes' scaling inside the model)."""
+    af = default_airframe()
+    _Probe.booked = []
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(rotor, "_Sampler", _Probe)
+        ds = rotor.run({**COARSE, "bifilar": "locked", "fuselage": "modal",
+                        "extrapolation_window": 0})
+    assert float(ds.run_periodicity_change) <= COARSE["periodic_tolerance"]
+    assert ds.station_acceleration.dims == ("station", "axis", "time")
+    assert list(ds.station.values) == list(af.station_names)
+    assert list(ds.axis.values) == ["x", "y", "z"]
+    nrev = int(ds.run_samples_per_rev)
+    acc = ds.station_acceleration.values
+    assert acc.shape == (af.n_stations, 3, nrev) and np.isfinite(acc).all()
+    seat = harmonics(acc[af.station_index("pilot_seat")], nrev, 1, 4)
+    g = float(np.linalg.norm(seat.amplitude[:, 4])) / rotor.G0
+    assert g > 0 and np.isclose(g, float(ds.pilot_seat_vibration_4p))
+    assert f"pilot-seat 4P vibration {g:.3g} g" in ds.attrs["message"]
+    # the independent check, from the booked η of the recorded revolution (the model's η is
+    # that of the conditioned shapes: the booked displacement is in the model's scaling)
+    # (the last booked row at each recorded azimuth: on the periodic response the booked
+    # revolution after the record repeats it, to the periodicity tolerance)
+    rows = np.array(_Probe.booked)
+    period = 2 * np.pi / float(ds.run_hub_speed)
+    phase = (rows[:, 0] - float(ds.time[0])) / period
+    on = np.abs(phase - np.round(phase)) < 1e-6 / period
+    pick = [int(np.flatnonzero(on & (np.abs((phase - np.round(phase)) * period
+                                            + float(ds.time[0]) - t) < 1e-6)
+                               )[-1]) if False else 0 for t in ds.time.values]
     p = rotor.SPEC.validate({**COARSE, "fuselage": "modal"})
     scaled = rotor.conditioned_airframe(af, 2 * np.pi / p.hub_speed / nrev, p.hub_mass)
     disp = scaled.station_accelerations(booked[:, 1:].T)  # Φ_s η (m), the same product
