@@ -10,6 +10,11 @@ The model, built from solver parts:
   A shaft head of mass ``shaft_mass`` is welded to its top; an in-plane damper at the top
   gives its first in-plane mode the damping ratio ``fuselage_damping_ratio`` (the paper
   states none; without it the fuselage transient never decays).
+* or, with ``fuselage = "modal"``, a modal airframe (:mod:`studies.airframe`, the file
+  ``fuselage_modes``): a massless shaft head (the file carries its mass) attached at the hub
+  centre through the modal coordinates, no ground clamp, no fuselage damper (the modal
+  damping replaces it); the hub loads are the attachment's, and each station's acceleration
+  Φ_s η̈ is recorded (``station_acceleration``, ``pilot_seat_vibration_4p``).
 * hub — a rigid body spinning at Ω on the shaft head (driven revolute about the shaft axis:
   ψ = Ωt, counter-clockwise seen from above, as the UH-60A; ψ = 0 aft, along +x).
 * four UH-60A blades (:mod:`studies.uh60a`: Yeo's section properties with the Davis cuff,
@@ -1296,7 +1301,9 @@ def symmetry(system: System, parts: RotorParts) -> CyclicSymmetry:
     """The rotor's quarter-revolution symmetry: the hub turns about the shaft head's axis
     (tilting with the fuselage-beam), blade j + 1 (its hinge links and airloads) and bifilar
     j + 1 take the places of blade j and bifilar j; the fuselage-beam, shaft head and inflow
-    are non-rotating (the equivalent's particle too; its rigid mass turns with the hub)."""
+    are non-rotating (the equivalent's particle too; its rigid mass turns with the hub), and
+    so are a modal airframe's coordinates: in no sector and not rotating, they are left as
+    they are."""
     sectors, rotating = _spinning(system, parts)
     return CyclicSymmetry(system, sectors, rotating=rotating, axis=Z, centre=parts.shaft)
 
