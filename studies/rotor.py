@@ -440,7 +440,8 @@ class RotorParts:
     fuselage_stiffness: float
     fuselage_damping: float
     wake: RotorWake | None = None
-    # the modal airframe (fuselage = "modal"), its modal coordinates and the hub attachment
+    # the modal airframe (fuselage = "modal") as built (conditioned_airframe: the shapes that
+    # go with the model's η), its modal coordinates and the hub attachment
     airframe: Airframe | None = None
     modal: ModalStructure | None = None
     attachment: ModalAttachment | None = None
@@ -686,7 +687,8 @@ def build(p: Parameters, d: RotorDesign | None = None, damping_factor: float = 1
     absorbers = add_absorbers(model, hub, shaft, holes, p, d.pin_damping,
                               tuning_speed=p.equivalent_tuning_speed)
     return model, RotorParts(hub, shaft, fus, blades, lines, inflow, absorbers, holes,
-                             d.fuselage_stiffness, c_fus, wake, d.airframe, modal, attachment)
+                             d.fuselage_stiffness, c_fus, wake,
+                             None if d.airframe is None else airframe, modal, attachment)
 
 
 def conditioned_airframe(airframe: Airframe, h: float, reference_mass: float) -> Airframe:

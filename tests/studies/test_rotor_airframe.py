@@ -80,6 +80,28 @@ def test_symmetry_leaves_the_modal_coordinates_unchanged():
     assert parts.fuselage is None and parts.fuselage_damping == 0.0
 
 
+def test_sampler_records_the_stations_acceleration():
+    """A few steps on the shipped airframe: the sampler's station columns are the file's
+    station shapes times η̈ in the file's scaling (the model's η̈, scaled back by the
+    conditioning's factors recomputed here: s_i = √(m_hub / (m_i (1 + (ω_i h / 2)²))))."""
+    p = rotor.SPEC.validate({**COARSE, "fuselage": "modal"})
+    model, parts = rotor.build(p)
+    system = System(model)
+    h = 2 * np.pi / p.hub_speed / p.steps_per_rev
+    integ = rotor.integrator(system, p, h, parts)
+    for _ in range(3):
+        integ.step()
+    row = rotor._Sampler(system, parts)(integ)
+    af = default_airframe()
+    stations = row[rotor._PINS.stop :].reshape(af.n_stations, 3)
+    w = 2 * np.pi * af.frequencies
+    s = np.sqrt(p.hub_mass / (af.masses * (1 + (w * h / 2) ** 2)))
+    eta_dd = integ.qdd[parts.modal.indices(system)]
+    want = np.einsum("sdn,n->sd", af.station_shapes, s * eta_dd)
+    np.testing.assert_allclose(stations, want, rtol=1e-12, atol=1e-12 * np.abs(want).max())
+    assert np.abs(want).max() > 0
+
+
 def _force_4p(ds, axis: str) -> complex:
     h = harmonics(ds[f"hub_force_{axis}_fixed"].values, int(ds.run_samples_per_rev), 1, 4)
     return complex(h.cos[4], h.sin[4])
