@@ -188,7 +188,8 @@ class _Probe(rotor._Sampler):
 @pytest.mark.slow
 @pytest.mark.xfail(raises=RuntimeError, strict=True,
                    reason="the coarse locked case on the shipped airframe marches 80 "
-                          "revolutions without becoming periodic (docs/models.md)")
+                          "revolutions without becoming periodic: its roll and pitch "
+                          "suspension modes (docs/models.md)")
 def test_shipped_airframe_runs_and_archives_the_stations():
     """Locked bifilars on the shipped airframe: periodic, every station's acceleration
     archived; its 4P harmonic checked independently against −(4Ω)² times the 4P harmonic of
