@@ -325,26 +325,39 @@ class CrossChecks:
         trusted = getattr(self.spec, "trusted", None)
         return trusted(params) if trusted is not None else dict(params)
 
-    def __call__(self, params: Mapping[str, Any]) -> None:
-        """Raise :class:`ParameterError` if the model rejects the complete ``params``."""
+    def __call__(self, params: Mapping[str, Any]) -> dict[str, Any]:
+        """Raise :class:`ParameterError` if the model rejects the complete ``params``; return
+        the values the check derived that differ from ``params`` (a check may complete the
+        parameters, e.g. with the digest of a file one names: see ``ModelSpec.check``)."""
         if self.spec.check is None:
-            return
+            return {}
         for names, passed in self._passed.items():
             if tuple(params[n] for n in names) in passed:
-                return
+                return {}
         self.calls += 1
         target = self._typed(params)
         reads = _Reads(target, self.spec.parameters)
         try:
-            self.spec.check(reads)
+            out = self.spec.check(reads)
         except ParameterError:
             raise
         except Exception:
-            # The check needs the real object (e.g. it copies it): check that, remember nothing.
-            self.spec.check(target)
-            return
+            # The check needs the real object (e.g. it copies it, or completes it): check
+            # that, remember nothing, and keep what it derived.
+            return _derived(params, self.spec.check(target))
+        if out is not None:  # derived values: per case, remember nothing
+            return _derived(params, out)
         names = tuple(sorted(reads.names if reads.names is not None else params))
         self._passed.setdefault(names, set()).add(tuple(params[n] for n in names))
+        return {}
+
+
+def _derived(params: Mapping[str, Any], out: Any) -> dict[str, Any]:
+    """The values of a check's completed parameters ``out`` that differ from ``params``."""
+    if out is None:
+        return {}
+    values = out.as_dict() if hasattr(out, "as_dict") else dict(out)
+    return {k: v for k, v in values.items() if k in params and params[k] != v}
 
 
 def _suggest(name: str, known: Mapping[str, Param]) -> str:
@@ -461,7 +474,7 @@ def load_study(path: str | os.PathLike[str]) -> Study:
     def complete(label: str, given: dict[str, Any]) -> dict[str, Any]:
         params = {**defaults, **given, **continued}
         try:
-            cross_check(params)
+            params.update(cross_check(params))
             if continuation is not None:
                 # the branch's other end, where a combination the model rejects would stop it
                 cross_check({**params, continuation.parameter: continuation.stop})

@@ -1373,7 +1373,7 @@ def read_case_airframe(p: Parameters) -> tuple[Airframe, str]:
     return airframe, digest
 
 
-def _check(p: Parameters) -> Parameters:
+def _check(p: Parameters) -> Parameters | None:
     periodic.check(p)
     trim.check(p)
     holes_for(p)
@@ -1384,14 +1384,15 @@ def _check(p: Parameters) -> Parameters:
     # the modal airframe's file is read and checked here, before any case runs, and its
     # content's digest becomes a parameter: the case id (a hash of the parameters) then
     # changes with the file, so a sweep never reuses results of an edited file at one path
-    digest, window = "", p.shooting_window
-    if p.fuselage == "modal":
-        _, digest = read_case_airframe(dataclasses.replace(p, fuselage_modes_sha256=""))
-        # a modal airframe marches to its periodic response: on the shipped airframe the
-        # shooting's extrapolated restarts diverged (a singular Newton matrix a few steps
-        # after the restart, its largest pivot 1e20), with free and locked bifilars alike
-        window = 0
-    return dataclasses.replace(p, fuselage_modes_sha256=digest, shooting_window=window)
+    if p.fuselage != "modal":
+        # (None: nothing derived, so a sweep's cross-checks remember the combination)
+        return dataclasses.replace(p, fuselage_modes_sha256="") if p.fuselage_modes_sha256 \
+            else None
+    _, digest = read_case_airframe(dataclasses.replace(p, fuselage_modes_sha256=""))
+    # a modal airframe marches to its periodic response: on the shipped airframe the
+    # shooting's extrapolated restarts diverged (a singular Newton matrix a few steps after
+    # the restart, its largest pivot 1e20), with free and locked bifilars alike
+    return dataclasses.replace(p, fuselage_modes_sha256=digest, shooting_window=0)
 
 
 SPEC = ModelSpec("rotor", PARAMETERS, simulate, _check,

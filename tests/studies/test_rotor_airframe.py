@@ -232,3 +232,22 @@ def test_shipped_airframe_runs_and_archives_the_stations():
     want = -((4 * omega) ** 2) * (hd.cos[..., 4] + 1j * hd.sin[..., 4])
     got = ha.cos[..., 4] + 1j * ha.sin[..., 4]
     assert np.abs(got - want).max() < 0.02 * np.abs(want).max(), (got, want)
+
+
+def test_a_study_case_id_follows_the_airframe_file(tmp_path):
+    """A study file's modal case carries the file's SHA-256 in its parameters (the sweep's
+    cross-check completes them), so an edited file at the same path is another case."""
+    from pipelines.studyfile import load_study
+
+    path = tmp_path / "airframe.toml"
+    write_airframe(beam_airframe(damping_ratio=0.02), path)
+    study = tmp_path / "s.toml"
+    study.write_text(f'model = "rotor"\ntitle = "t"\n[fixed]\nfuselage = "modal"\n'
+                     f'fuselage_modes = "{path}"\n[sweep]\nbifilar = ["locked", "free"]\n')
+    first = load_study(study)
+    assert all(len(c.params["fuselage_modes_sha256"]) == 64 for c in first.cases)
+    assert all(c.params["shooting_window"] == 0 for c in first.cases)
+    write_airframe(beam_airframe(damping_ratio=0.03), path)
+    second = load_study(study)
+    ids = {c.case_id for c in first.cases}
+    assert ids.isdisjoint(c.case_id for c in second.cases)
