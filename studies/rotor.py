@@ -400,8 +400,9 @@ OUTPUTS: dict[str, Output] = {
     "advance_ratio": Output("1", "advance ratio μ = U / (Ω R)", dims=()),
     "effective_fuselage_stiffness": Output(
         "N m-1", "in-plane stiffness of the fuselage-beam at the hub, 3 EI / L^3 (EI times "
-        "fuselage_bending_stiffness_scale)", dims=()),
-    "fuselage_damping": Output("N s m-1", "in-plane damper at the shaft head", dims=()),
+        "fuselage_bending_stiffness_scale; the beam's, unused with a modal airframe)", dims=()),
+    "fuselage_damping": Output("N s m-1", "in-plane damper at the shaft head (0 with a modal "
+                               "airframe: its modal damping replaces it)", dims=()),
     **trim.OUTPUTS,
     **periodic.RUN_OUTPUTS,
     **periodic.STEP_ERROR_OUTPUTS,
