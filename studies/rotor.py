@@ -318,12 +318,12 @@ FUSELAGE_ELEMENTS = 2
 FUSELAGE_SECTION_INERTIA = 1e-3
 SHAFT_INERTIA = (10.0, 10.0, 10.0)
 # The shaft head on a modal airframe has no mass (the airframe file carries it) but a unit
-# principal inertia (kg m2): with none, its orientation is fixed by constraint rows alone and
-# the Newton matrix's pivots fell below the singularity threshold (5e-17 of the largest on the
-# shipped file, 7e-14 on the fuselage-beam's modes) after some revolutions; the hub's polar
-# inertia is a unit value for the same reason. It adds 1 kg m2 to the airframe at the hub
-# (the shipped file's roll inertia is 6,317 kg m2; beam_airframe(tip_inertia = SHAFT_INERTIA
-# less it) keeps the beam's sum exact).
+# principal inertia (kg m2), as the hub's polar inertia is a unit value: a body whose
+# orientation only constraint rows fix leaves the Newton matrix nearer singular. (Measured: the
+# singular Newton matrices first met on a modal airframe were cured by conditioned_airframe,
+# not by this inertia; whether it is still needed was not checked.) It adds 1 kg m2 to the
+# airframe at the hub (the shipped file's roll inertia is 6,317 kg m2;
+# beam_airframe(tip_inertia = SHAFT_INERTIA less it) keeps the beam's sum exact).
 MODAL_SHAFT_INERTIA = (1.0, 1.0, 1.0)
 # First guess of the thrust coefficient: the Peters–He states start near the rotor's level
 # with it.
