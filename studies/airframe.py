@@ -105,7 +105,6 @@ import difflib
 import json
 import math
 import re
-import tomllib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from importlib import resources
@@ -116,7 +115,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from solver.modal import ModalAttachment, ModalStructure
-from studies.parameters import ParameterError
+from studies.parameters import ParameterError, read_toml
 
 if TYPE_CHECKING:
     from solver.beams import BeamNode
@@ -450,16 +449,7 @@ def read_airframe(path: str | Path) -> Airframe:
         the file, the mode or station, the key, the value and the valid range).
     """
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise AirframeError(f"airframe file not found: {path}") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise AirframeError(f"cannot read airframe file {path}: {exc}") from exc
-    try:
-        doc = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise AirframeError(f"{path}: not valid TOML: {exc}") from exc
+    doc = read_toml(path, AirframeError, "airframe file")[1]
     try:
         return _parse(doc)
     except AirframeError as exc:
