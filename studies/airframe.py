@@ -456,6 +456,25 @@ def read_airframe(path: str | Path) -> Airframe:
         raise AirframeError(f"{path}: {exc}") from None
 
 
+def _named_entry(entry: Any, kind: str, index: int, allowed: Sequence[str],
+                 required: Sequence[str], hints: Mapping[str, str],
+                 seen: list[str]) -> tuple[dict[str, Any], str]:
+    """The ``index``-th ``[[stations]]`` or ``[[modes]]`` table (``kind`` "station" or "mode")
+    checked for its keys and a unique name, which is appended to ``seen``; returns it and the
+    place name the messages use."""
+    where = f"{kind}s[{index}]"
+    entry = _table(entry, where)
+    if isinstance(entry.get("name"), str):
+        where = f"{kind} {entry['name']!r} ({where})"
+    _keys(entry, where, allowed, required, hints)
+    _check_name(entry["name"], where)
+    if entry["name"] in seen:
+        raise AirframeError(f"{where}: duplicate name {entry['name']!r}; {kind} names must be "
+                            "unique")
+    seen.append(entry["name"])
+    return entry, where
+
+
 def _parse(doc: dict[str, Any]) -> Airframe:
     _keys(doc, "top level", TOP_KEYS, ("title", "source", "hub", "modes"), HINTS)
     for key in ("title", "source"):
@@ -471,16 +490,8 @@ def _parse(doc: dict[str, Any]) -> Airframe:
     station_names: list[str] = []
     station_positions: list[list[float]] = []
     for j, entry in enumerate(raw_stations):
-        where = f"stations[{j}]"
-        entry = _table(entry, where)
-        if isinstance(entry.get("name"), str):
-            where = f"station {entry['name']!r} ({where})"
-        _keys(entry, where, STATION_KEYS, STATION_KEYS, HINTS)
-        _check_name(entry["name"], where)
-        if entry["name"] in station_names:
-            raise AirframeError(f"{where}: duplicate name {entry['name']!r}; station names "
-                                "must be unique")
-        station_names.append(entry["name"])
+        entry, where = _named_entry(entry, "station", j, STATION_KEYS, STATION_KEYS, HINTS,
+                                    station_names)
         station_positions.append(_vector(entry["position"], where, "position", 3,
                                          "x, y, z in m"))
 
@@ -496,16 +507,7 @@ def _parse(doc: dict[str, Any]) -> Airframe:
     station_shapes = np.zeros((len(station_names), 3, len(raw_modes)))
     required = ("name", "frequency", "damping_ratio", "generalized_mass", "hub")
     for i, entry in enumerate(raw_modes):
-        where = f"modes[{i}]"
-        entry = _table(entry, where)
-        if isinstance(entry.get("name"), str):
-            where = f"mode {entry['name']!r} ({where})"
-        _keys(entry, where, MODE_KEYS, required, MODE_HINTS)
-        _check_name(entry["name"], where)
-        if entry["name"] in names:
-            raise AirframeError(f"{where}: duplicate name {entry['name']!r}; mode names must "
-                                "be unique")
-        names.append(entry["name"])
+        entry, where = _named_entry(entry, "mode", i, MODE_KEYS, required, MODE_HINTS, names)
         for key in values:
             values[key].append(_number(entry[key], where, key, units[key]))
         hub_shapes.append(_vector(entry["hub"], where, "hub", 6, HINTS["hub_shape"]))
