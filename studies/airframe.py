@@ -93,7 +93,7 @@ transient then decays by e in 1/(ζ_s ω_s) = 0.8 s (3.4 revolutions at 27 rad/s
 of 0 is accepted by the format (for a model that reacts the mean loads otherwise) but the
 rotor should not be run on it.
 
-The shipped default is ``studies/data/uh60a_airframe.toml`` (:func:`default_airframe`), a
+The shipped default is ``studies/data/uh60a/airframe.toml`` (:func:`default_airframe`), a
 UH-60A-class airframe; its file documents which numbers are published and which assumed.
 :func:`beam_airframe` makes a modal airframe from the rotor's own clamped fuselage-beam and
 shaft head, so that the modal and the beam airframes can be compared on the same rotor.
@@ -131,7 +131,7 @@ HUB_KEYS = ("position",)
 STATION_KEYS = ("name", "position")
 MODE_KEYS = ("name", "frequency", "damping_ratio", "generalized_mass", "hub", "stations")
 NAME = re.compile(r"[A-Za-z0-9_-]+\Z")
-DEFAULT_FILE = "uh60a_airframe.toml"
+DEFAULT_FILE = "airframe.toml"
 # A degenerate cluster of beam modes (equal frequencies to this relative spread) is made
 # mass-orthogonal before its shapes are written.
 CLUSTER_TOL = 1e-7
@@ -363,8 +363,8 @@ def station_accelerations(airframe: Airframe, eta_ddot: ArrayLike) -> Array:
 
 # ------------------------------------------------------------------------------ reading
 def default_airframe_path() -> Path:
-    """The shipped UH-60A-class airframe file (``studies/data/uh60a_airframe.toml``)."""
-    return Path(str(resources.files("studies") / "data" / DEFAULT_FILE))
+    """The shipped UH-60A-class airframe file (``studies/data/uh60a/airframe.toml``)."""
+    return Path(str(resources.files("studies.data.uh60a") / DEFAULT_FILE))
 
 
 def default_airframe() -> Airframe:
