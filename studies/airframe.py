@@ -601,13 +601,11 @@ def _clamped_beam(length: float, bending_stiffness: float, tip_mass: float,
     tip body)."""
     from solver.bodies import ground
     from solver.model import Model
-    from solver.sections import isotropic_section
-    from studies.rotor import fuselage_beam
+    from studies.rotor import fuselage_beam, fuselage_section
 
-    section = isotropic_section(EA=axial_stiffness, GA2=shear_stiffness, GA3=shear_stiffness,
-                                GJ=torsional_stiffness, EI2=bending_stiffness,
-                                EI3=bending_stiffness, mass=mass_per_length,
-                                i22=section_inertia, i33=section_inertia)
+    section = fuselage_section(bending_stiffness, axial=axial_stiffness,
+                               shear=shear_stiffness, torsion=torsional_stiffness,
+                               mass=mass_per_length, inertia=section_inertia)
     g0 = ground()
     beam, tip, mounts = fuselage_beam(g0, length, section, tip_mass, elements,
                                       tuple(np.asarray(tip_inertia, dtype=float)))

@@ -540,12 +540,15 @@ def design(p: Parameters) -> RotorDesign:
         lag_feedback=lag_feedback_gains(p))
 
 
-def fuselage_section(bending_stiffness: float) -> dict[str, float]:
-    """The fuselage-beam section's constants (:func:`solver.sections.isotropic_section`'s
-    keywords) for bending stiffness EI (N m², both planes)."""
-    return {"EA": FUSELAGE_EA, "GA2": FUSELAGE_GA, "GA3": FUSELAGE_GA, "GJ": FUSELAGE_GJ,
-            "EI2": bending_stiffness, "EI3": bending_stiffness, "mass": FUSELAGE_MASS,
-            "i22": FUSELAGE_SECTION_INERTIA, "i33": FUSELAGE_SECTION_INERTIA}
+def fuselage_section(bending_stiffness: float, *, axial: float = FUSELAGE_EA,
+                     shear: float = FUSELAGE_GA, torsion: float = FUSELAGE_GJ,
+                     mass: float = FUSELAGE_MASS,
+                     inertia: float = FUSELAGE_SECTION_INERTIA) -> SectionTable:
+    """The fuselage-beam's isotropic section: bending stiffness EI (N m², both planes), axial
+    EA (N), shear GA (N, both planes), torsion GJ (N m²), mass (kg/m) and rotary inertia
+    i22 = i33 (kg m), by default the rotor's constants."""
+    return isotropic_section(EA=axial, GA2=shear, GA3=shear, GJ=torsion, EI2=bending_stiffness,
+                             EI3=bending_stiffness, mass=mass, i22=inertia, i33=inertia)
 
 
 def fuselage_beam(base: Body, length: float, section: SectionTable, shaft_mass: float,
@@ -580,8 +583,7 @@ def build(p: Parameters, d: RotorDesign | None = None, damping_factor: float = 1
     model = Model()
     # ---- fuselage-beam and shaft head (non-rotating)
     fus, shaft, mounts = fuselage_beam(g0, p.fuselage_length,
-                                       isotropic_section(**fuselage_section(d.bending_stiffness)),
-                                       p.shaft_mass)
+                                       fuselage_section(d.bending_stiffness), p.shaft_mass)
     c_fus = d.fuselage_damping
     model.add(g0, fus, shaft, *mounts,
               Spring("fuselage_damper", None, shaft, stiffness=np.zeros((3, 3)),
@@ -783,7 +785,7 @@ def vibratory_change(rows: np.ndarray, other: np.ndarray, steps_per_rev: int) ->
     return worst
 
 
-def newton_tolerance(steps_per_rev: int, inflow: str = "peters_he") -> float:
+def newton_tolerance(steps_per_rev: int, inflow: str) -> float:
     """Newton's relative tolerance at ``steps_per_rev`` with the ``inflow`` model:
     :data:`NEWTON_TOL` (:data:`NEWTON_TOL_WAKE` with the prescribed wake), or where it is
     smaller :data:`NEWTON_TOL_H3` at :data:`NEWTON_STEPS` falling as h³ (see
