@@ -71,7 +71,6 @@ import itertools
 import json
 import math
 import os
-import tomllib
 from collections.abc import Collection, Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -86,7 +85,7 @@ from pipelines.archive import (
     reserved_names,
 )
 from studies.branches import Continuation, continuation_settings
-from studies.parameters import ModelSpec, Param, ParameterError
+from studies.parameters import ModelSpec, Param, ParameterError, read_toml
 from studies.registry import available, get_model, resolve_model
 
 # Length of the hex case id: 64 bits makes an accidental clash within one study negligible.
@@ -412,16 +411,7 @@ def load_study(path: str | os.PathLike[str]) -> Study:
         also given in ``[fixed]``, ``[sweep]`` or a case.
     """
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise StudyError(f"study file not found: {path}") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise StudyError(f"cannot read study file {path}: {exc}") from exc
-    try:
-        doc = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise StudyError(f"{path}: not valid TOML: {exc}") from exc
+    text, doc = read_toml(path, StudyError, "study file")
     src = str(path)
 
     unknown = [k for k in doc if k not in TOP_LEVEL_KEYS]

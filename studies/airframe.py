@@ -93,7 +93,7 @@ transient then decays by e in 1/(ζ_s ω_s) = 0.8 s (3.4 revolutions at 27 rad/s
 of 0 is accepted by the format (for a model that reacts the mean loads otherwise) but the
 rotor should not be run on it.
 
-The shipped default is ``studies/data/uh60a_airframe.toml`` (:func:`default_airframe`), a
+The shipped default is ``studies/data/uh60a/airframe.toml`` (:func:`default_airframe`), a
 UH-60A-class airframe; its file documents which numbers are published and which assumed.
 :func:`beam_airframe` makes a modal airframe from the rotor's own clamped fuselage-beam and
 shaft head, so that the modal and the beam airframes can be compared on the same rotor.
@@ -105,7 +105,6 @@ import difflib
 import json
 import math
 import re
-import tomllib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from importlib import resources
@@ -116,7 +115,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from solver.modal import ModalAttachment, ModalStructure
-from studies.parameters import ParameterError
+from studies.parameters import ParameterError, read_toml
 
 if TYPE_CHECKING:
     from solver.beams import BeamNode
@@ -132,7 +131,7 @@ HUB_KEYS = ("position",)
 STATION_KEYS = ("name", "position")
 MODE_KEYS = ("name", "frequency", "damping_ratio", "generalized_mass", "hub", "stations")
 NAME = re.compile(r"[A-Za-z0-9_-]+\Z")
-DEFAULT_FILE = "uh60a_airframe.toml"
+DEFAULT_FILE = "airframe.toml"
 # A degenerate cluster of beam modes (equal frequencies to this relative spread) is made
 # mass-orthogonal before its shapes are written.
 CLUSTER_TOL = 1e-7
@@ -364,8 +363,8 @@ def station_accelerations(airframe: Airframe, eta_ddot: ArrayLike) -> Array:
 
 # ------------------------------------------------------------------------------ reading
 def default_airframe_path() -> Path:
-    """The shipped UH-60A-class airframe file (``studies/data/uh60a_airframe.toml``)."""
-    return Path(str(resources.files("studies") / "data" / DEFAULT_FILE))
+    """The shipped UH-60A-class airframe file (``studies/data/uh60a/airframe.toml``)."""
+    return Path(str(resources.files("studies.data.uh60a") / DEFAULT_FILE))
 
 
 def default_airframe() -> Airframe:
@@ -450,20 +449,30 @@ def read_airframe(path: str | Path) -> Airframe:
         the file, the mode or station, the key, the value and the valid range).
     """
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise AirframeError(f"airframe file not found: {path}") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise AirframeError(f"cannot read airframe file {path}: {exc}") from exc
-    try:
-        doc = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise AirframeError(f"{path}: not valid TOML: {exc}") from exc
+    doc = read_toml(path, AirframeError, "airframe file")[1]
     try:
         return _parse(doc)
     except AirframeError as exc:
         raise AirframeError(f"{path}: {exc}") from None
+
+
+def _named_entry(entry: Any, kind: str, index: int, allowed: Sequence[str],
+                 required: Sequence[str], hints: Mapping[str, str],
+                 seen: list[str]) -> tuple[dict[str, Any], str]:
+    """The ``index``-th ``[[stations]]`` or ``[[modes]]`` table (``kind`` "station" or "mode")
+    checked for its keys and a unique name, which is appended to ``seen``; returns it and the
+    place name the messages use."""
+    where = f"{kind}s[{index}]"
+    entry = _table(entry, where)
+    if isinstance(entry.get("name"), str):
+        where = f"{kind} {entry['name']!r} ({where})"
+    _keys(entry, where, allowed, required, hints)
+    _check_name(entry["name"], where)
+    if entry["name"] in seen:
+        raise AirframeError(f"{where}: duplicate name {entry['name']!r}; {kind} names must be "
+                            "unique")
+    seen.append(entry["name"])
+    return entry, where
 
 
 def _parse(doc: dict[str, Any]) -> Airframe:
@@ -481,16 +490,8 @@ def _parse(doc: dict[str, Any]) -> Airframe:
     station_names: list[str] = []
     station_positions: list[list[float]] = []
     for j, entry in enumerate(raw_stations):
-        where = f"stations[{j}]"
-        entry = _table(entry, where)
-        if isinstance(entry.get("name"), str):
-            where = f"station {entry['name']!r} ({where})"
-        _keys(entry, where, STATION_KEYS, STATION_KEYS, HINTS)
-        _check_name(entry["name"], where)
-        if entry["name"] in station_names:
-            raise AirframeError(f"{where}: duplicate name {entry['name']!r}; station names "
-                                "must be unique")
-        station_names.append(entry["name"])
+        entry, where = _named_entry(entry, "station", j, STATION_KEYS, STATION_KEYS, HINTS,
+                                    station_names)
         station_positions.append(_vector(entry["position"], where, "position", 3,
                                          "x, y, z in m"))
 
@@ -506,16 +507,7 @@ def _parse(doc: dict[str, Any]) -> Airframe:
     station_shapes = np.zeros((len(station_names), 3, len(raw_modes)))
     required = ("name", "frequency", "damping_ratio", "generalized_mass", "hub")
     for i, entry in enumerate(raw_modes):
-        where = f"modes[{i}]"
-        entry = _table(entry, where)
-        if isinstance(entry.get("name"), str):
-            where = f"mode {entry['name']!r} ({where})"
-        _keys(entry, where, MODE_KEYS, required, MODE_HINTS)
-        _check_name(entry["name"], where)
-        if entry["name"] in names:
-            raise AirframeError(f"{where}: duplicate name {entry['name']!r}; mode names must "
-                                "be unique")
-        names.append(entry["name"])
+        entry, where = _named_entry(entry, "mode", i, MODE_KEYS, required, MODE_HINTS, names)
         for key in values:
             values[key].append(_number(entry[key], where, key, units[key]))
         hub_shapes.append(_vector(entry["hub"], where, "hub", 6, HINTS["hub_shape"]))
@@ -609,13 +601,11 @@ def _clamped_beam(length: float, bending_stiffness: float, tip_mass: float,
     tip body)."""
     from solver.bodies import ground
     from solver.model import Model
-    from solver.sections import isotropic_section
-    from studies.rotor import fuselage_beam
+    from studies.rotor import fuselage_beam, fuselage_section
 
-    section = isotropic_section(EA=axial_stiffness, GA2=shear_stiffness, GA3=shear_stiffness,
-                                GJ=torsional_stiffness, EI2=bending_stiffness,
-                                EI3=bending_stiffness, mass=mass_per_length,
-                                i22=section_inertia, i33=section_inertia)
+    section = fuselage_section(bending_stiffness, axial=axial_stiffness,
+                               shear=shear_stiffness, torsion=torsional_stiffness,
+                               mass=mass_per_length, inertia=section_inertia)
     g0 = ground()
     beam, tip, mounts = fuselage_beam(g0, length, section, tip_mass, elements,
                                       tuple(np.asarray(tip_inertia, dtype=float)))

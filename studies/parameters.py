@@ -16,8 +16,10 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import tomllib
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, fields
+from pathlib import Path
 from typing import Any, ClassVar
 
 import numpy as np
@@ -27,6 +29,22 @@ from numpy.typing import ArrayLike
 
 class ParameterError(ValueError):
     """A model parameter is unknown, of the wrong type or outside its valid range."""
+
+
+def read_toml(path: Path, error: type[Exception], what: str) -> tuple[str, dict[str, Any]]:
+    """The text of the TOML file at ``path`` and its document; a missing or unreadable file,
+    or invalid TOML, raises ``error`` with a one-line message naming the ``what`` ("study
+    file", "airframe file") and the path."""
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise error(f"{what} not found: {path}") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise error(f"cannot read {what} {path}: {exc}") from exc
+    try:
+        return text, tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise error(f"{path}: not valid TOML: {exc}") from exc
 
 
 @dataclass(frozen=True)

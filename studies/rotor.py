@@ -137,19 +137,21 @@ FT = 0.3048  # m
 # periodic (its harmonics changing by 30–90 % a revolution for 80 revolutions, locked or
 # free), although its largest Floquet multiplier there is 0.91–0.92: at 1e-8 and 1e-9 both
 # speeds are periodic in 26–42 revolutions. Table 1's harmonics move by at most 0.2 % from
-# 1e-7 to 1e-8 and a case costs 8–15 % more (2.3 → 2.7 iterations a step). With the
-# prescribed wake 1e-8 is not enough: at 40 kt, propulsively trimmed, the locked and
-# equivalent cases were never periodic (harmonics changing by 1.5–4.5 % a revolution for 80
-# revolutions: the fuselage-beam's in-plane mode at 3.17/rev in the fixed frame, and noise
-# near the step's Nyquist frequency in the lag shear); at 1e-9 and 1e-10 the locked case is
-# periodic in 38.25 revolutions. At 1e-9 Table 1's locked case costs 25 % more (44.5 s
-# against 35.5 s, 53 revolutions against 51.25).
+# 1e-7 to 1e-8 and a case costs 8–15 % more (2.3 → 2.7 iterations a step).
+# With the prescribed wake 1e-8 is not enough (NEWTON_TOL_WAKE): at 40 kt, propulsively
+# trimmed, the locked and equivalent cases were never periodic (harmonics changing by
+# 1.5–4.5 % a revolution for 80 revolutions: the fuselage-beam's in-plane mode at 3.17/rev in
+# the fixed frame, and noise near the step's Nyquist frequency in the lag shear); at 1e-9 and
+# 1e-10 the locked case is periodic in 38.25 revolutions. At 1e-9 Table 1's locked case with
+# the wake costs 25 % more (44.5 s against 35.5 s, 53 revolutions against 51.25). Peters–He
+# alone keeps 1e-8: at 1e-9 the shooting of its validated cases takes other paths (the free
+# case's extrapolated harmonics 1.8 % off the half-step reference, against 0.70 % at 1e-8).
 # Finer steps need it tighter: Newton's error per step adds up over the 1/h steps while the
 # scheme's error falls as h², so the ratio holds with a tolerance in h³ (newton_tolerance). At
 # 480 steps/rev 1e-7 left the free case's harmonics changing by 3 % after 80 revolutions;
-# 1.25e-8 (h³) and 1e-8 shoot to periodic, as 2.96e-8 does at 360. With NEWTON_TOL the h³ law
-# acts from about 1100 steps per revolution.
-NEWTON_TOL = 1e-9
+# 1.25e-8 (h³) and 1e-8 shoot to periodic, as 2.96e-8 does at 360.
+NEWTON_TOL = 1e-8
+NEWTON_TOL_WAKE = 1e-9
 NEWTON_TOL_H3 = 1e-7
 NEWTON_STEPS = 240
 # The lifting lines' wake states (m/s) are judged on a tolerance this many times Newton's. The
@@ -598,12 +600,15 @@ def design(p: Parameters) -> RotorDesign:
         airframe=read_case_airframe(p)[0] if p.fuselage == "modal" else None)
 
 
-def fuselage_section(bending_stiffness: float) -> dict[str, float]:
-    """The fuselage-beam section's constants (:func:`solver.sections.isotropic_section`'s
-    keywords) for bending stiffness EI (N m², both planes)."""
-    return {"EA": FUSELAGE_EA, "GA2": FUSELAGE_GA, "GA3": FUSELAGE_GA, "GJ": FUSELAGE_GJ,
-            "EI2": bending_stiffness, "EI3": bending_stiffness, "mass": FUSELAGE_MASS,
-            "i22": FUSELAGE_SECTION_INERTIA, "i33": FUSELAGE_SECTION_INERTIA}
+def fuselage_section(bending_stiffness: float, *, axial: float = FUSELAGE_EA,
+                     shear: float = FUSELAGE_GA, torsion: float = FUSELAGE_GJ,
+                     mass: float = FUSELAGE_MASS,
+                     inertia: float = FUSELAGE_SECTION_INERTIA) -> SectionTable:
+    """The fuselage-beam's isotropic section: bending stiffness EI (N m², both planes), axial
+    EA (N), shear GA (N, both planes), torsion GJ (N m²), mass (kg/m) and rotary inertia
+    i22 = i33 (kg m), by default the rotor's constants."""
+    return isotropic_section(EA=axial, GA2=shear, GA3=shear, GJ=torsion, EI2=bending_stiffness,
+                             EI3=bending_stiffness, mass=mass, i22=inertia, i33=inertia)
 
 
 def fuselage_beam(base: Body, length: float, section: SectionTable, shaft_mass: float,
@@ -639,9 +644,8 @@ def build(p: Parameters, d: RotorDesign | None = None, damping_factor: float = 1
     modal = attachment = None
     if d.airframe is None:
         # ---- fuselage-beam and shaft head (non-rotating)
-        fus, shaft, mounts = fuselage_beam(
-            g0, p.fuselage_length, isotropic_section(**fuselage_section(d.bending_stiffness)),
-            p.shaft_mass)
+        fus, shaft, mounts = fuselage_beam(g0, p.fuselage_length,
+                                           fuselage_section(d.bending_stiffness), p.shaft_mass)
         c_fus = d.fuselage_damping
         model.add(g0, fus, shaft, *mounts,
                   Spring("fuselage_damper", None, shaft, stiffness=np.zeros((3, 3)),
@@ -891,11 +895,13 @@ def vibratory_change(rows: np.ndarray, other: np.ndarray, steps_per_rev: int) ->
     return worst
 
 
-def newton_tolerance(steps_per_rev: int) -> float:
-    """Newton's relative tolerance at ``steps_per_rev``: :data:`NEWTON_TOL`, or where it is
+def newton_tolerance(steps_per_rev: int, inflow: str) -> float:
+    """Newton's relative tolerance at ``steps_per_rev`` with the ``inflow`` model:
+    :data:`NEWTON_TOL` (:data:`NEWTON_TOL_WAKE` with the prescribed wake), or where it is
     smaller :data:`NEWTON_TOL_H3` at :data:`NEWTON_STEPS` falling as h³ (see
     :data:`NEWTON_TOL`)."""
-    return min(NEWTON_TOL, NEWTON_TOL_H3 * (NEWTON_STEPS / steps_per_rev) ** 3)
+    tol = NEWTON_TOL_WAKE if inflow == "prescribed_wake" else NEWTON_TOL
+    return min(tol, NEWTON_TOL_H3 * (NEWTON_STEPS / steps_per_rev) ** 3)
 
 
 def integrator(system: System, p: Parameters, h: float, parts: RotorParts | None = None,
@@ -913,7 +919,7 @@ def integrator(system: System, p: Parameters, h: float, parts: RotorParts | None
     rho = p.rho_inf if p.scheme == "galpha" else None
     spin = None if parts is None else turning(system, parts, p.hub_speed)
     if tol is None:
-        tol = newton_tolerance(p.steps_per_rev)
+        tol = newton_tolerance(p.steps_per_rev, p.inflow)
     if wake_tolerance is None:
         wake_tolerance = WAKE_TOLERANCE if p.steps_per_rev <= NEWTON_STEPS else 1.0
     if not (math.isfinite(wake_tolerance) and wake_tolerance > 0):
@@ -1123,7 +1129,7 @@ def simulate(p: Parameters) -> xr.Dataset:
 
         def coarse(n: int) -> Integrator:
             return integrator(system, p, 2 * np.pi / omega / n, parts,
-                              tol=newton_tolerance(n),
+                              tol=newton_tolerance(n, p.inflow),
                               wake_tolerance=WAKE_TOLERANCE if n <= NEWTON_STEPS else 1.0)
 
         est = periodic.step_error(

@@ -158,6 +158,19 @@ def test_forced_translational_mode_matches_closed_form_frequency_response():
                                                 / np.sqrt(M_MODE * wn**2 * m_eff), rel=1e-12)
 
 
+def _reactions_after(model, att, scheme: str, h: float, steps: int):
+    """The integrator after ``steps`` steps of ``scheme`` at ``h``, and there, with the
+    multipliers consistent with the state's accelerations, the attachment's force and moment
+    on its body (``System.reaction``) and its generalized force on the modes."""
+    integ = make_integrator(System(model), scheme, h)
+    for _ in range(steps):
+        integ.step()
+    s = integ.sys
+    _, lam, _ = initial_accelerations(s, integ.q, integ.v, integ.t, multipliers=True)
+    force, moment = s.reaction(att, integ.q, lam, integ.t)
+    return integ, force, moment, att.modal_force(s, integ.q, lam, integ.t)
+
+
 def test_attachment_reaction_is_the_generalized_force_on_the_mode():
     """The attachment's force on the body F (``System.reaction``) and on the mode Q
     (``ModalAttachment.modal_force``, ``ModalStructure.generalized_force``) are action and
@@ -167,13 +180,7 @@ def test_attachment_reaction_is_the_generalized_force_on_the_mode():
     the equations of motion's to 2.8e-14."""
     h_c, _, _ = sdof(M_MODE + M_BODY * PHI_T**2, PHI_T * F0)
     model, af, _, att = translational_model(h_c)
-    integ = make_integrator(System(model), "galpha", 1e-3)
-    for _ in range(37):
-        integ.step()
-    s = integ.sys
-    _, lam, _ = initial_accelerations(s, integ.q, integ.v, integ.t, multipliers=True)
-    force, moment = s.reaction(att, integ.q, lam, integ.t)
-    q_mode = att.modal_force(s, integ.q, lam, integ.t)
+    integ, force, moment, q_mode = _reactions_after(model, att, "galpha", 1e-3, 37)
     assert np.all(moment == 0.0)
     assert q_mode[0] == pytest.approx(-PHI_T * force[0], rel=1e-14)
     eta, rate, acc = af.modal_state(integ)
@@ -192,13 +199,7 @@ def test_attachment_moment_enters_the_modes_through_the_rotation_shapes():
     3.8e-10 relative at |Φ_r η| ≈ 3e-9 rad (3.8e-11 at a tenth of the amplitude)."""
     model, af, _ = three_mode_model(rate=(5e-6, -4e-6, 3e-6))
     att = model.elements[-1]
-    integ = make_integrator(System(model), "ep", 2e-3)
-    for _ in range(10):
-        integ.step()
-    s = integ.sys
-    _, lam, _ = initial_accelerations(s, integ.q, integ.v, integ.t, multipliers=True)
-    force, moment = s.reaction(att, integ.q, lam, integ.t)
-    q_mode = att.modal_force(s, integ.q, lam, integ.t)
+    integ, force, moment, q_mode = _reactions_after(model, att, "ep", 2e-3, 10)
     scale = np.abs(q_mode).max()
     assert np.abs(q_mode + PHI_T3.T @ force + PHI_R3.T @ moment).max() < 2e-9 * scale
     np.testing.assert_array_equal(af.generalized_force(integ), q_mode)  # the only attachment

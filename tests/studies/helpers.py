@@ -17,3 +17,9 @@ def hub_samples(ds) -> np.ndarray:
 # tests run that are about anything but the inflow (a third of the prescribed wake's
 # revolutions, each cheaper). The inflow's convergence is tested in test_rotor_wake.py.
 PETERS_HE = {"inflow": "peters_he", "aero_points": 2}
+
+# The tests' coarse rotor case (Peters–He alone): 120 steps/rev, 3 elements, 3 settling
+# revolutions, periodic to 5 %, harmonics as marched (no step-error estimate).
+COARSE_ROTOR = {**PETERS_HE, "steps_per_rev": 120, "blade_elements": 3, "wake_states": 2,
+                "settle_revolutions": 3, "periodic_tolerance": 0.05, "error_estimate": False,
+                "richardson": False}

@@ -56,7 +56,7 @@ def test_shipped_file_counts_units_and_ranges():
     """The default file reads, holds the required stations and modes, and its numbers are
     in plausible ranges and consistent with the model's axes (x aft, y starboard, z up)."""
     af = default_airframe()
-    assert default_airframe_path().name == "uh60a_airframe.toml"
+    assert default_airframe_path().name == "airframe.toml"
     assert af.n_modes == 10 and af.n_stations == 4
     assert af.station_names == ("pilot_seat", "cabin_centre", "tail", "centre_of_gravity")
     rigid = ("surge_x", "sway_y", "heave_z", "roll_x", "pitch_y", "yaw_z")
@@ -692,5 +692,5 @@ def test_airframe_constructor_checks_arrays():
 
 def test_data_file_sits_beside_the_module():
     """The shipped file is where the reader looks (studies/data), and in the source tree."""
-    here = Path(airframe_module.__file__).parent / "data" / "uh60a_airframe.toml"
+    here = Path(airframe_module.__file__).parent / "data" / "uh60a" / "airframe.toml"
     assert default_airframe_path().resolve() == here.resolve() and here.is_file()

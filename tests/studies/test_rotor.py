@@ -31,6 +31,7 @@ from studies.parameters import ParameterError
 from studies.rotor import SPEC, _line_set, add_blade, airloads
 from studies.trim import ControlSchedule
 from studies.uh60a import UH60A, blade_sections, section_origin
+from tests.studies.helpers import PETERS_HE
 
 OMEGA = UH60A.omega_ref
 SPEED = 150 * 0.3048  # m/s, the paper's 150 ft/s
@@ -337,15 +338,20 @@ def test_table1_trends(tmp_path):
 
 
 def test_newton_tolerance_falls_as_h_cubed_at_fine_steps():
-    """Newton's tolerance is 1e-9 (at 1e-7 the trimmed rotor at 40–60 kt never became
-    periodic with Peters–He, at 1e-8 not at 40 kt with the prescribed wake) until 1e-7 at 240
-    steps/rev falling as h³ is smaller (Newton's error adds up over 1/h steps while the
-    scheme's falls as h²; at 480 steps/rev 1e-7 left the free case's harmonics changing by 3 %
-    after 80 revolutions): 1.953125e-10 at 1920."""
+    """Newton's tolerance is 1e-8 (at 1e-7 the trimmed rotor at 40–60 kt never became
+    periodic), 1e-9 with the prescribed wake (at 1e-8 it never did at 40 kt), until 1e-7 at
+    240 steps/rev falling as h³ is smaller (Newton's error adds up over 1/h steps while the
+    scheme's falls as h²): 1e-8 at 480, where 1e-7 left the free case's harmonics changing by
+    3 % after 80 revolutions, 1.5625e-9 at 960, 1.953125e-10 at 1920."""
     from studies.rotor import newton_tolerance
 
-    assert newton_tolerance(120) == newton_tolerance(240) == newton_tolerance(960) == 1e-9
-    assert math.isclose(newton_tolerance(1920), 1.953125e-10, rel_tol=1e-12)
+    he = "peters_he"
+    assert newton_tolerance(120, he) == newton_tolerance(240, he) == newton_tolerance(480, he)
+    assert newton_tolerance(240, he) == 1e-8
+    assert math.isclose(newton_tolerance(960, he), 1.5625e-9, rel_tol=1e-12)
+    wake = "prescribed_wake"
+    assert newton_tolerance(240, wake) == newton_tolerance(960, wake) == 1e-9
+    assert math.isclose(newton_tolerance(1920, wake), 1.953125e-10, rel_tol=1e-12)
 
 
 def test_wake_states_are_judged_on_their_own_tolerance():
@@ -374,13 +380,15 @@ def test_wake_states_are_judged_on_their_own_tolerance():
 @pytest.mark.slow
 @pytest.mark.parametrize("steps_per_rev", [360, 480])
 def test_finer_steps_shoot_to_the_periodic_response(steps_per_rev):
-    """The locked case reaches its periodic response at finer steps too (at the default
-    tolerance, measured 15.5 and 17.25 revolutions, the step-error estimate's 3.75 and 5.5 not
-    counted): with the wake states relaxed there, their Newton error kept the lightly damped
-    lag-regressive/fuselage mode alive at 1–2 % and shooting never converged."""
+    """The locked case (Peters–He alone) reaches its periodic response at finer steps too (at
+    the default tolerance, measured 15.5 and 17.25 revolutions, the step-error estimate's 3.75
+    and 5.5 not counted): with the wake states relaxed there, their Newton error kept the
+    lightly damped lag-regressive/fuselage mode alive at 1–2 % and shooting never
+    converged."""
     from studies.rotor import run
 
-    ds = run({"bifilar": "locked", "steps_per_rev": steps_per_rev, "floquet": False})
+    ds = run({**PETERS_HE, "bifilar": "locked", "steps_per_rev": steps_per_rev,
+              "floquet": False})
     assert float(ds.run_periodicity_change) <= 1e-3
     revolutions = float(ds.run_simulated_revolutions) - float(ds.run_estimate_revolutions)
     assert revolutions <= 24

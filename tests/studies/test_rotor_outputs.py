@@ -24,13 +24,11 @@ import pytest
 from solver.forces import RelativeRotation
 from studies import rotor
 from studies.harmonics import case_harmonics
-from tests.studies.helpers import PETERS_HE
+from tests.studies.helpers import COARSE_ROTOR
 
 # (the recorded revolutions as marched: the step-error estimate's coarser run would also be
 # booked, and its extrapolation would move the outputs off the booked rows)
-COARSE = {**PETERS_HE, "steps_per_rev": 120, "blade_elements": 3, "wake_states": 2,
-          "settle_revolutions": 3, "periodic_tolerance": 0.05, "error_estimate": False,
-          "richardson": False}
+COARSE = COARSE_ROTOR
 
 
 class _Probe(rotor._Sampler):

@@ -44,7 +44,7 @@ from solver.system import System
 from studies import rotor, trim
 from studies.parameters import ParameterError
 from studies.uh60a import UH60A, blade_airstations, blade_chord
-from tests.studies.helpers import PETERS_HE
+from tests.studies.helpers import COARSE_ROTOR, PETERS_HE
 
 Z = np.array([0.0, 0.0, 1.0])
 
@@ -315,9 +315,7 @@ def test_second_harmonic_closed_form_is_the_harmonic_balance_to_its_order(mu):
 # ---- the UH-60 model ---------------------------------------------------------------------------
 # the coarse case of tests/studies/test_rotor_outputs.py: untrimmed, 15.5 revolutions
 # (without the step-error estimate: the revolutions compared are the periodic response's)
-COARSE = {**PETERS_HE, "steps_per_rev": 120, "blade_elements": 3, "wake_states": 2,
-          "settle_revolutions": 3, "periodic_tolerance": 0.05, "error_estimate": False,
-          "richardson": False}
+COARSE = COARSE_ROTOR
 UNTRIMMED_REVOLUTIONS = 15.5
 
 
