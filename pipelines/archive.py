@@ -282,6 +282,8 @@ def case_summary(ds: xr.Dataset, spec: ModelSpec, n_max: int = N_MAX) -> xr.Data
         out = case_harmonics(ds, spec.outputs, n_max)
         psi_last = psi0 + 2 * np.pi * (revs - 1)
         for name, (units, long_name) in histories.items():
+            if name not in ds:  # an optional history this run has not
+                continue
             other = tuple(d for d in ds[name].dims if d != "time")
             var = ds[name].transpose(*other, "time")
             attrs = {"units": units, "long_name": long_name,
@@ -294,6 +296,8 @@ def case_summary(ds: xr.Dataset, spec: ModelSpec, n_max: int = N_MAX) -> xr.Data
     else:
         out = xr.Dataset()
         for name, (units, long_name) in histories.items():
+            if name not in ds:
+                continue
             other = tuple(d for d in ds[name].dims if d != "time")
             var = ds[name].transpose(*other, "time")
             out[name] = ((*other, "sample"), var.values,

@@ -278,7 +278,8 @@ def _bar_panel(ax: Any, ds: xr.Dataset, name: str, cases: Cases, shown: Sequence
                scale: float) -> None:
     """Grouped bars: one group per (harmonic, direction), one bar per case in its colour."""
     var = ds[name]
-    groups = [(h, d) for h in shown for d in ds["direction"].values]
+    # (a direction the vector lacks, e.g. z beside a station's x, y, z, is NaN throughout)
+    groups = [(h, d) for h in shown for d in _directions(var)]
     width = 0.8 / len(cases)
     x = np.arange(len(groups))
     for i, case in enumerate(cases):
@@ -288,6 +289,13 @@ def _bar_panel(ax: Any, ds: xr.Dataset, name: str, cases: Cases, shown: Sequence
     ax.set_xticks(x, [f"{h}P {d}" for h, d in groups])
     ax.grid(True, axis="y", alpha=0.3)
     ax.set_ylim(bottom=0)
+
+
+def _directions(var: xr.DataArray) -> list[str]:
+    """The directions along which ``var`` has a value somewhere."""
+    other = [d for d in var.dims if d != "direction"]
+    held = np.isfinite(var.values).any(axis=tuple(var.dims.index(d) for d in other))
+    return [str(d) for d, ok in zip(var["direction"].values, held, strict=True) if ok]
 
 
 def _bar_width(bars: int) -> float:
@@ -301,7 +309,7 @@ def _harmonic_bars(ds: xr.Dataset, name: str, title: str, out_dir: Path,
     var = ds[name]
     scale, units = _display_units(var.attrs.get("units", ""), var.values)
     shown = _frame_harmonics(ds, var, name)
-    fig = Figure(figsize=(_bar_width(len(cases) * len(shown) * ds.sizes["direction"]), 5.5),
+    fig = Figure(figsize=(_bar_width(len(cases) * len(shown) * len(_directions(var))), 5.5),
                  layout="constrained")
     ax = fig.subplots()
     _bar_panel(ax, ds, name, cases, shown, scale)
@@ -392,7 +400,7 @@ def _harmonic_lines(ds: xr.Dataset, name: str, title: str, out_dir: Path,
     axes = fig.subplots(1, len(picks), squeeze=False)[0]
     styles = ("-", "--", ":", "-.")
     for ax, k in zip(axes, picks, strict=True):
-        for d, direction in enumerate(ds["direction"].values):
+        for d, direction in enumerate(_directions(var)):
             for combo, color in zip(combos, colors, strict=True):
                 sel = dict(zip(others, combo, strict=True))
                 y = values.isel(sel).sel(direction=direction, harmonic=k).transpose(first).values
@@ -573,8 +581,10 @@ def _histories(ds: xr.Dataset, names: list[str], stem: str, cases: Cases, out_di
             scale, units = by_units[var.attrs.get("units", "")]
             for i, case in enumerate(chunk):
                 x, xlabel = _time_axis(ds, case.sel)
-                _line(ax, *_revolution(ds, x, var.isel(case.sel).values * scale), case.style,
-                      i, len(chunk), label=case.label)
+                y = var.isel(case.sel).values * scale
+                if not np.isfinite(y).any():
+                    continue  # a history this case's model has not (an optional output)
+                _line(ax, *_revolution(ds, x, y), case.style, i, len(chunk), label=case.label)
             ax.set_title(var.attrs.get("long_name", name), fontsize="medium")
             ax.set_ylabel(_units_label(units))
             _finish_axis(ax, ds)

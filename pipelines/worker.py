@@ -137,9 +137,22 @@ def compile_notice(say: Any, message: str | None = None) -> Iterator[None]:
 
 def nan_outputs(summary: xr.Dataset) -> list[str]:
     """The archived outputs of a case summary that hold NaN (a result the model could not
-    determine, e.g. a period from a record shorter than two periods)."""
+    determine, e.g. a period from a record shorter than two periods).
+
+    A direction along which a variable is NaN throughout, while it has values along
+    another, is a component it does not have (an in-plane vector's z beside the x, y, z of a
+    model's stations), not a failure."""
     return [name for name, var in summary.data_vars.items()
-            if var.dtype.kind == "f" and bool(np.isnan(var.values).any())]
+            if var.dtype.kind == "f" and bool(np.isnan(_held(var).values).any())]
+
+
+def _held(var: xr.DataArray) -> xr.DataArray:
+    """``var`` without the directions along which it is NaN throughout, unless it is NaN
+    everywhere."""
+    if "direction" not in var.dims or var.sizes["direction"] < 2:
+        return var
+    held = var.notnull().any([d for d in var.dims if d != "direction"])
+    return var.isel(direction=held.values) if bool(held.any()) else var
 
 
 def _check_result(result: xr.Dataset) -> None:

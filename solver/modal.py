@@ -335,6 +335,17 @@ class ModalAttachment(Element):
     small rotation from its initial orientation Φ_r (η − η0); the body is declared where the
     structure deflected by η0 carries it (with η0 = 0, the undeformed structure).
 
+    With a ``rotation_centre`` c, the translation rows gain the second-order term of a rigid
+    rotation, p − point − Φ_t u − ½ θ × (θ × r) = 0 with u = η − η0, θ = Φ_r u and
+    r = point − c: the attached point turns on an arc about c, not along its tangent. The
+    linear rows leave out the geometric stiffness of a steady load at the point, which matters
+    when that load is large: a rotor's thrust T at a hub h above an airframe's centre of
+    gravity turns with the shaft when the airframe rolls by φ, and on the tangent its moment
+    about the centre is T h φ, a negative roll stiffness that soft rigid-body modes cannot
+    hold (on the arc it is zero, as for the rigid body). The rows are then quadratic in η,
+    still exact as discrete derivatives (the midpoint rule is exact on quadratics), and their
+    forces still do no work.
+
     The structure is linear (small motions) and so is this measure of the body's rotation from
     its initial orientation: for a rotation by φ about the unit axis n it is sin φ n, the
     rotation vector exact to first order (error φ³/6) and built from the directors the body's
@@ -368,6 +379,10 @@ class ModalAttachment(Element):
     rotation_shapes
         Φ_r (3 × n, global axes, rad per m of η); ``None``: the body's rotation is left free
         (a spherical attachment). At least one of the two is needed.
+    rotation_centre
+        Global position (m) at t = 0 of the centre about which the rotations Φ_r η turn the
+        point (an airframe's centre of gravity, about which its rigid-body rotation modes are
+        given); ``None`` keeps the translation rows linear. Needs both shape blocks.
     """
 
     name: str
@@ -376,6 +391,7 @@ class ModalAttachment(Element):
     point: ArrayLike
     translation_shapes: ArrayLike | None
     rotation_shapes: ArrayLike | None = None
+    rotation_centre: ArrayLike | None = None
 
     set_class = QuadraticSet
 
@@ -405,6 +421,16 @@ class ModalAttachment(Element):
         if self.phi_r is not None and isinstance(self.body, PointMass):
             raise ValueError(f"{owner}: rotation_shapes given but {self.body.name!r} is a point "
                              "mass and has no rotation; attach a rigid body or pass None")
+        self.arm = None
+        if self.rotation_centre is not None:
+            c = np.asarray(self.rotation_centre, dtype=float).reshape(-1)
+            if c.shape != (3,) or not np.all(np.isfinite(c)):
+                raise ValueError(f"{owner}: rotation_centre must be 3 finite numbers (m, "
+                                 f"global) or None, got {self.rotation_centre!r}")
+            if self.phi_t is None or self.phi_r is None:
+                raise ValueError(f"{owner}: rotation_centre needs both translation_shapes and "
+                                 "rotation_shapes")
+            self.arm = p - c  # r, from the centre to the point (m)
 
     @property
     def body_b(self) -> RigidBody | PointMass | PrescribedBody | BeamNode:
@@ -426,6 +452,8 @@ class ModalAttachment(Element):
             qb.add_vector(rows, self.point_on_b(lay)
                           - VecExpr([], self.point - self.phi_t @ eta0))
             _add_modal_terms(qb, rows, -self.phi_t, eta)
+            if self.arm is not None:
+                _add_arc_terms(qb, rows, self.phi_r, self.arm, eta, eta0)
             out.append(rows)
         if self.phi_r is not None:
             rows = qb.new_rows(3)
@@ -473,6 +501,33 @@ def _add_matrix_vector(qb: QuadraticBuilder, rows: NDArray[np.int64], a: Array,
     for i in range(3):
         if const[i] != 0.0:
             qb.add_constant(int(rows[i]), float(const[i]))
+
+
+def _add_arc_terms(qb: QuadraticBuilder, rows: NDArray[np.int64], phi_r: Array, arm: Array,
+                   eta: int, eta0: Array) -> None:
+    """rows[k] −= ½ [θ × (θ × r)]_k, θ = Φ_r u, u = η − η0 (η_j at index eta + j).
+
+    θ × (θ × r) = θ (θ·r) − r (θ·θ), so row k's term is uᵀ S_k u with S_k the symmetric part
+    of Φ_r[k]ᵀ (Φ_rᵀ r)ᵀ − r_k Φ_rᵀ Φ_r; with u = η − η0 it is ηᵀ S_k η − 2 (S_k η0)·η +
+    η0ᵀ S_k η0."""
+    w = phi_r.T @ arm  # θ·r = w·u
+    gram = phi_r.T @ phi_r  # θ·θ = uᵀ gram u
+    n = phi_r.shape[1]
+    for k in range(3):
+        a = np.outer(phi_r[k], w) - arm[k] * gram
+        s = -0.25 * (a + a.T)  # −½ times the symmetric part
+        row = int(rows[k])
+        for i in range(n):
+            for j in range(n):
+                if s[i, j] != 0.0:
+                    qb.add_product(row, eta + i, eta + j, float(s[i, j]))
+        lin = -2.0 * (s @ eta0)
+        for j in range(n):
+            if lin[j] != 0.0:
+                qb.add_linear(row, eta + j, float(lin[j]))
+        const = float(eta0 @ s @ eta0)
+        if const != 0.0:
+            qb.add_constant(row, const)
 
 
 def _add_modal_terms(qb: QuadraticBuilder, rows: NDArray[np.int64], phi: Array,

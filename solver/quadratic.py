@@ -123,6 +123,10 @@ class QuadraticBuilder:
             if u.const[k] != 0.0:
                 self.c.append((int(rows[k]), float(u.const[k]), 0))
 
+    def add_product(self, row: int, i: int, j: int, coef: float) -> None:
+        """Add coef·q_i·q_j to row ``row``."""
+        self.h.append((row, i, j, coef, 0))
+
     def add_linear(self, row: int, index: int, coef: float, f: TimeFunction | None = None) -> None:
         self.g.append((row, index, coef, self.fun(f)))
 

@@ -46,6 +46,9 @@ The file format (TOML)
     [hub]
     position = [0.0, 0.0, 0.0]              # m: the hub attachment point
 
+    [centre_of_gravity]                      # optional: the centre of the rigid-body
+    position = [0.43, 0.0, -1.70]            # rotations, m (see "Rigid-body modes")
+
     [[stations]]                             # response stations (any number, names unique)
     name = "pilot_seat"
     position = [-3.59, 0.53, -1.91]          # m
@@ -93,6 +96,17 @@ transient then decays by e in 1/(ζ_s ω_s) = 0.8 s (3.4 revolutions at 27 rad/s
 of 0 is accepted by the format (for a model that reacts the mean loads otherwise) but the
 rotor should not be run on it.
 
+The rotor's thrust is large and turns with the shaft: when the airframe rolls by φ about its
+centre of gravity, h below the hub, the thrust T tilts by φ with it. On the modes' linear
+shapes the hub moves along the tangent of its arc, and the tilted thrust then has the moment
+T h φ about the centre, a negative roll (and pitch) stiffness: 1.2e5 N·m/rad on the shipped
+file, half its roll suspension, and with the rotor's own response the suspended airframe
+rolled over (measured: past 0.9 rad in 20 revolutions). On the arc, as for the rigid body it
+stands for, the moment is zero. The optional ``[centre_of_gravity]`` table gives that centre:
+:meth:`Airframe.elements` then attaches the hub on the arc to second order
+(:class:`solver.modal.ModalAttachment`'s ``rotation_centre``), which carries the geometric
+stiffness of the thrust exactly to the order of a linear model.
+
 The shipped default is ``studies/data/uh60a/airframe.toml`` (:func:`default_airframe`), a
 UH-60A-class airframe; its file documents which numbers are published and which assumed.
 :func:`beam_airframe` makes a modal airframe from the rotor's own clamped fuselage-beam and
@@ -126,7 +140,7 @@ Array = NDArray[np.float64]
 DIRECTIONS = ("x", "y", "z")  # the station outputs' direction labels (model axes)
 HUB_COMPONENTS = ("translation x", "translation y", "translation z", "rotation x",
                   "rotation y", "rotation z")
-TOP_KEYS = ("title", "source", "hub", "stations", "modes")
+TOP_KEYS = ("title", "source", "hub", "centre_of_gravity", "stations", "modes")
 HUB_KEYS = ("position",)
 STATION_KEYS = ("name", "position")
 MODE_KEYS = ("name", "frequency", "damping_ratio", "generalized_mass", "hub", "stations")
@@ -190,6 +204,9 @@ class Airframe:
         about x, y, z (rad per m of η).
     station_shapes
         Translation shapes at the stations (n_stations, 3, n), m per m of η.
+    centre_of_gravity
+        The centre of the rigid-body rotation modes (3,), m, or ``None`` (the hub then
+        follows the linear shapes alone: see the module docstring's "Rigid-body modes").
     """
 
     title: str
@@ -203,6 +220,7 @@ class Airframe:
     masses: Array
     hub_shapes: Array
     station_shapes: Array
+    centre_of_gravity: Array | None = None
 
     def __post_init__(self) -> None:
         for key in ("title", "source"):
@@ -227,6 +245,12 @@ class Airframe:
         }
         for key, shape in arrays.items():
             object.__setattr__(self, key, _frozen(getattr(self, key), shape, key))
+        if self.centre_of_gravity is not None:
+            object.__setattr__(self, "centre_of_gravity",
+                               _frozen(self.centre_of_gravity, (3,), "centre_of_gravity"))
+            if not np.all(np.isfinite(self.centre_of_gravity)):
+                raise AirframeError("centre_of_gravity: position = "
+                                    f"{self.centre_of_gravity.tolist()} m must be finite")
         if not np.all(np.isfinite(self.hub_position)):
             raise AirframeError(f"hub: position = {self.hub_position.tolist()} m must be "
                                 "finite")
@@ -320,9 +344,12 @@ class Airframe:
         """
         modal = ModalStructure(name, self.frequencies, self.damping_ratios, self.masses,
                                displacement=displacement, velocity=velocity)
-        p = self.hub_position if point is None else point
+        p = self.hub_position if point is None else np.asarray(point, dtype=float)
+        # the centre of gravity, where the attachment point puts the hub
+        centre = (None if self.centre_of_gravity is None
+                  else p + self.centre_of_gravity - self.hub_position)
         joint = ModalAttachment(f"{name}_hub", body, modal, p, self.hub_shapes[:3],
-                                self.hub_shapes[3:])
+                                self.hub_shapes[3:], rotation_centre=centre)
         return modal, joint
 
     def station_accelerations(self, eta_ddot: ArrayLike) -> Array:
@@ -420,6 +447,7 @@ def _vector(value: Any, where: str, key: str, n: int, meaning: str) -> list[floa
 HINTS = {
     "title": "a line of text", "source": "text: where the numbers come from",
     "hub": "a [hub] table with position = [x, y, z] in m", "modes": "[[modes]] tables",
+    "centre_of_gravity": "a [centre_of_gravity] table with position = [x, y, z] in m",
     "position": "[x, y, z] in m", "name": "a bare TOML key",
     "frequency": "Hz, >= 0", "damping_ratio": "fraction of critical damping, in [0, 1)",
     "generalized_mass": "kg, > 0",
@@ -483,6 +511,12 @@ def _parse(doc: dict[str, Any]) -> Airframe:
     hub = _table(doc["hub"], "[hub]")
     _keys(hub, "[hub]", HUB_KEYS, HUB_KEYS, HINTS)
     hub_position = _vector(hub["position"], "[hub]", "position", 3, "x, y, z in m")
+    centre = None
+    if "centre_of_gravity" in doc:
+        table = _table(doc["centre_of_gravity"], "[centre_of_gravity]")
+        _keys(table, "[centre_of_gravity]", HUB_KEYS, HUB_KEYS, HINTS)
+        centre = _vector(table["position"], "[centre_of_gravity]", "position", 3,
+                         "x, y, z in m")
 
     raw_stations = doc.get("stations", [])
     if not isinstance(raw_stations, list):
@@ -535,7 +569,7 @@ def _parse(doc: dict[str, Any]) -> Airframe:
         mode_names=tuple(names), frequencies=values["frequency"],
         damping_ratios=values["damping_ratio"], masses=values["generalized_mass"],
         hub_shapes=np.array(hub_shapes).T.reshape(6, len(names)),
-        station_shapes=station_shapes)
+        station_shapes=station_shapes, centre_of_gravity=centre)
 
 
 # ------------------------------------------------------------------------------ writing
@@ -573,6 +607,9 @@ def write_airframe(airframe: Airframe, path: str | Path) -> Path:
         "[hub]",
         f"position = {_floats(airframe.hub_position)}",
     ]
+    if airframe.centre_of_gravity is not None:
+        lines += ["", "[centre_of_gravity]",
+                  f"position = {_floats(airframe.centre_of_gravity)}"]
     for name, p in zip(airframe.station_names, airframe.station_positions, strict=True):
         lines += ["", "[[stations]]", f"name = {json.dumps(name)}", f"position = {_floats(p)}"]
     for i, name in enumerate(airframe.mode_names):

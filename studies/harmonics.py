@@ -269,16 +269,25 @@ def case_harmonics(ds: xr.Dataset, outputs: Mapping[str, Output],
             ),
         }
     )
-    if vectors:
+    # the in-plane vectors' directions x, y; a model whose outputs have a direction dimension
+    # of their own (e.g. x, y, z) sets the labels, and the vectors are NaN along the others
+    labels = (ds["direction"].values.astype(str) if "direction" in ds.coords
+              else np.array(["x", "y"]))
+    if vectors or "direction" in ds.coords:
         out = out.assign_coords(direction=(
             "direction",
-            np.array(["x", "y"]),
-            {"units": "1", "long_name": "in-plane direction of the frame"},
+            labels,
+            {"units": "1", "long_name": "direction of the frame (in-plane vectors: x, y)"},
         ))
+    where = [list(labels).index(d) if d in labels else -1 for d in ("x", "y")]
+    if vectors and min(where) < 0:
+        raise ValueError(f"the model's direction labels {list(labels)} lack x or y, which "
+                         "its in-plane vectors need")
     for name, ((vx, vy), units, long_name) in vectors.items():
         if vx not in ds or vy not in ds:
             continue
-        h = transform(np.stack([ds[vx].values, ds[vy].values]))
+        h2 = transform(np.stack([ds[vx].values, ds[vy].values]))
+        h = Harmonics(*(_placed(part, where, len(labels)) for part in h2))
         for suffix, values, what in (
             ("_amplitude", h.amplitude, "harmonic amplitude"),
             ("_cos", h.cos, "cosine coefficient"),
@@ -306,6 +315,13 @@ def case_harmonics(ds: xr.Dataset, outputs: Mapping[str, Output],
                 {"units": decl.units, "long_name": f"{decl.long_name}, {what}"},
             )
         out = copy_coords(out, ds, other)
+    return out
+
+
+def _placed(values: NDArray[np.float64], rows: list[int], n: int) -> NDArray[np.float64]:
+    """``values`` (2, …) put at rows ``rows`` of an (n, …) array of NaN."""
+    out = np.full((n, *values.shape[1:]), np.nan)
+    out[rows] = values
     return out
 
 

@@ -259,8 +259,7 @@ PARAMETERS: dict[str, Param] = {
     "fuselage": Param("beam", "1", "airframe under the rotor: beam (the paper's clamped "
                       "fuselage-beam carrying the shaft head) or modal (a free airframe given by "
                       "its normal modes in the file fuselage_modes, the hub attached at its hub "
-                      "point through the modal coordinates; it marches to its periodic "
-                      "response: validation sets shooting_window to 0)",
+                      "point through the modal coordinates)",
                       choices=("beam", "modal")),
     "fuselage_modes": Param("", "1", "modal airframe file (TOML, format in studies/airframe.py) "
                             "used with fuselage = modal; empty: the shipped UH-60A-class file "
@@ -340,19 +339,20 @@ OUTPUTS: dict[str, Output] = {
     "fuselage_moment_x_fixed": Output("N m", "fuselage-beam root bending moment about x (M11); "
                                       "absent with a modal airframe (no beam: NaN in an "
                                       "archive)",
-                                      history=True, figure="fuselage_moments"),
+                                      history=True, figure="fuselage_moments", optional=True),
     "fuselage_moment_y_fixed": Output("N m", "fuselage-beam root bending moment about y (M22); "
                                       "absent with a modal airframe (no beam: NaN in an "
                                       "archive)",
-                                      history=True, figure="fuselage_moments"),
+                                      history=True, figure="fuselage_moments", optional=True),
     "station": Output("1", "response station of the modal airframe file (absent with the "
                       "fuselage-beam)", dims=("station",)),
-    "axis": Output("1", "direction of a station's acceleration, model axes (x aft, y "
-                   "starboard, z up)", dims=("axis",)),
+    "direction": Output("1", "direction of a station's acceleration, model axes (x aft, y "
+                        "starboard, z up); the in-plane vectors' harmonics use x and y",
+                        dims=("direction",)),
     "station_acceleration": Output(
         "m s-2", "acceleration Φ_s η̈ of each response station of the modal airframe, model "
         "axes (absent with the fuselage-beam: NaN in an archive)",
-        dims=("station", "axis", "time"), history=True, harmonics=True),
+        dims=("station", "direction", "time"), history=True, harmonics=True, optional=True),
     "pilot_seat_vibration_4p": Output(
         "1", "4P vibration at the station pilot_seat in g (9.80665 m s-2): the magnitude of "
         "the 4P harmonic of its acceleration vector, sqrt(Σ over x, y, z of the 4P "
@@ -1174,7 +1174,7 @@ def simulate(p: Parameters) -> xr.Dataset:
     flown = controls.controls
     deg = (np.degrees(flown) if trimmer is not None
            else (p.collective, p.cyclic_cosine, p.cyclic_sine, p.shaft_tilt))
-    # the stations' accelerations (station, axis, time); none with the fuselage-beam
+    # the stations' accelerations (station, direction, time); none with the fuselage-beam
     station_names = () if parts.airframe is None else parts.airframe.station_names
     accel = data[:, _PINS.stop :].reshape(len(t), len(station_names), 3).transpose(1, 2, 0)
     pilot = float("nan")
@@ -1197,7 +1197,7 @@ def simulate(p: Parameters) -> xr.Dataset:
         "bifilar_cm_y_fixed": col["cmy"],
         "pin_angle": data[:, _PINS].T,
         "station": np.array(station_names, dtype=str),
-        "axis": np.array(DIRECTIONS),
+        "direction": np.array(DIRECTIONS),
         "station_acceleration": accel,
         "thrust": col["thrust"],
         "mean_inflow": col["lam0"],
@@ -1257,7 +1257,7 @@ def simulate(p: Parameters) -> xr.Dataset:
     # what one airframe has and the other not is left out (a sweep's archive holds NaN for
     # it): a modal airframe has no fuselage-beam moments, the beam no stations
     absent = ({"fuselage_moment_x_fixed", "fuselage_moment_y_fixed"} if parts.airframe
-              is not None else {"station", "axis", "station_acceleration"})
+              is not None else {"station", "station_acceleration"})
     values = {k: v for k, v in {**series, **facts}.items() if k not in absent}
     missing = [k for k, o in OUTPUTS.items() if k not in values and k not in absent
                and not o.optional and not o.is_vector]
@@ -1396,10 +1396,7 @@ def _check(p: Parameters) -> Parameters | None:
         return dataclasses.replace(p, fuselage_modes_sha256="") if p.fuselage_modes_sha256 \
             else None
     _, digest = read_case_airframe(dataclasses.replace(p, fuselage_modes_sha256=""))
-    # a modal airframe marches to its periodic response: on the shipped airframe the
-    # shooting's extrapolated restarts diverged (a singular Newton matrix a few steps after
-    # the restart, its largest pivot 1e20), with free and locked bifilars alike
-    return dataclasses.replace(p, fuselage_modes_sha256=digest, shooting_window=0)
+    return dataclasses.replace(p, fuselage_modes_sha256=digest)
 
 
 SPEC = ModelSpec("rotor", PARAMETERS, simulate, _check,

@@ -469,10 +469,11 @@ def test_static_displacement_is_the_attached_equilibrium():
     """Constant hub loads on a body attached to the shipped airframe: the static equilibrium's
     η (``solver.equilibrium``, Newton on the nonlinear model) against the linear
     :meth:`Airframe.static_displacement`. Their difference is second order in the load:
-    measured 3.1e-3 of the largest η at the UH-60A's mean loads (72.3 kN thrust, 38.3 kN·m
+    measured 7.0e-3 of the largest η at the UH-60A's mean loads (72.3 kN thrust, 38.3 kN·m
     shaft torque: the torque, tilted by the 0.01 rad pitch deflection, puts 380 N·m into roll
-    and torsion, which the linear formula leaves out), 3.1e-6 at a thousandth of them. Modes at
-    0 Hz are refused."""
+    and torsion, and the thrust, fixed in space here, stiffens roll and pitch by T h on the
+    arc about the centre of gravity; the linear formula leaves both out), and at a
+    thousandth of them (1.05e-5). Modes at 0 Hz are refused."""
     af = default_airframe()
     errors = []
     for scale in (1.0, 1e-3):
@@ -488,7 +489,7 @@ def test_static_displacement_is_the_attached_equilibrium():
         eta = eq.q[modal.indices(System(model))]
         expect = af.static_displacement(force, moment)
         errors.append(np.abs(eta - expect).max() / np.abs(expect).max())
-    assert errors[0] < 5e-3 and errors[1] < 5e-6  # measured 3.1e-3, 3.1e-6
+    assert errors[0] < 1e-2 and errors[1] < 2e-5  # measured 7.0e-3, 1.05e-5
     free = Airframe(title="t", source="s", hub_position=[0, 0, 0], station_names=(),
                     station_positions=np.zeros((0, 3)), mode_names=("drift",),
                     frequencies=[0.0], damping_ratios=[0.0], masses=[1.0],
