@@ -918,8 +918,11 @@ def plot_archive(
         if plain:
             paths += _histories(ds, plain, stem, cases, out, formats)
     if spec.periodic:
+        from pipelines.airframe_plots import airframe_figures
         from pipelines.envelope_plots import envelope_figures
 
         # (the rotor's, when it sweeps airspeed with trim or rotor speed)
         paths += envelope_figures(archived, list(spec.parameters), out, formats)
+        # (the rotor's, when a case stands on a modal airframe)
+        paths += airframe_figures(archived, out, formats)
     return paths

@@ -1055,7 +1055,8 @@ def simulate(p: Parameters) -> xr.Dataset:
     def periodic_response(tolerance: float = p.periodic_tolerance) -> periodic.PeriodicRecord:
         if p.shooting_window:
             return shoot(integ, lambda: sampler(integ), signals, observe=observe,
-                         symmetry=symmetry(system, parts), system=system, steps_per_rev=nrev,
+                         symmetry=shooting_symmetry(system, parts), system=system,
+                         steps_per_rev=nrev,
                          revolutions=p.revolutions, max_revolutions=p.max_revolutions,
                          tolerance=tolerance, groups=groups, separate_mean=True,
                          floor=floor, observe_floor=observe_floor, window=p.shooting_window,
@@ -1274,19 +1275,21 @@ def _multipliers(p: Parameters, integ, system: System, parts: RotorParts
         return {}, ""
     t = time.perf_counter()
     try:
-        mm = map_multipliers(integ, p.steps_per_rev // N_BLADES,
-                             symmetry=symmetry(system, parts), rate=p.hub_speed,
+        sym = shooting_symmetry(system, parts)
+        sectors = N_BLADES if sym is not None else 1
+        mm = map_multipliers(integ, p.steps_per_rev // sectors, symmetry=sym, rate=p.hub_speed,
                              vectors=FLOQUET_VECTORS, eps=FLOQUET_EPS, tol=FLOQUET_TOL,
                              accuracy=FLOQUET_ACCURACY)
     except (RuntimeError, ValueError) as exc:
         return {}, f"no Floquet multipliers: {exc}"
-    report(f"Floquet multipliers: largest {mm.largest:.4f} ({mm.evaluations} quarter "
-           f"revolutions, {time.perf_counter() - t:.1f} s; residual {mm.residuals[0]:.1e}, "
+    report(f"Floquet multipliers: largest {mm.largest:.4f} ({mm.evaluations} maps of 1/"
+           f"{sectors} revolution, {time.perf_counter() - t:.1f} s; residual "
+           f"{mm.residuals[0]:.1e}, "
            f"fresh {mm.fresh_residual:.1e})")
     if mm.failure:
         return {}, mm.failure
     return {"floquet_multiplier_max": np.float64(mm.largest),
-            "run_floquet_revolutions": np.float64(mm.evaluations / N_BLADES)}, ""
+            "run_floquet_revolutions": np.float64(mm.evaluations / sectors)}, ""
 
 
 def _spinning(system: System, parts: RotorParts) -> tuple[list[list[Any]], list[Any]]:
@@ -1304,6 +1307,15 @@ def _spinning(system: System, parts: RotorParts) -> tuple[list[list[Any]], list[
     if isinstance(parts.absorbers, EquivalentParts):
         rotating.append(parts.absorbers.rigid)
     return sectors, rotating
+
+
+def shooting_symmetry(system: System, parts: RotorParts) -> CyclicSymmetry | None:
+    """The symmetry the shooting and the Floquet multipliers map with: the quarter revolution
+    (:func:`symmetry`) on the fuselage-beam, whose in-plane stiffness is the same in every
+    direction; none (the one-revolution map) on a modal airframe, which is not symmetric under
+    a quarter turn (its roll and pitch, its lateral and vertical modes differ), so that the
+    blades' responses on it are not one response shifted by a quarter revolution."""
+    return None if parts.airframe is not None else symmetry(system, parts)
 
 
 def symmetry(system: System, parts: RotorParts) -> CyclicSymmetry:
