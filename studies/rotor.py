@@ -475,7 +475,8 @@ def add_blade(model: Model, hub, k: int, p: Parameters, damping_factor: float = 
                        driven=None if linked else driven))
     if linked:  # the pitch bearing free, the blade held by its pitch link
         swashplate.add_pitch_link(model, hub, blade.root, k, psi, e, omega, theta_start,
-                                  schedule.pitch(psi, reference=0.0), p)
+                                  schedule.pitch(psi, reference=0.0), p.pitch_link_stiffness,
+                                  p.pitch_horn_length)
     if p.lag_damping > 0 or damper.feedback:
         model.add(damper)
     return blade, damper

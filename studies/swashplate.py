@@ -38,9 +38,10 @@ blade pitch commands here do not depend on it, only the non-rotating ring's tilt
 The servos', the rings' and the pitch link's own compliance are lumped into the one link
 stiffness k; with the arm h the blade's root sees the torsional stiffness k h² about the pitch
 axis. The UH-60A's control-system stiffness and horn length are not public: the defaults
-(h = 0.2 m, k = 3e6 N/m, k h² = 1.2e5 N·m/rad) put the first torsion mode between 4.7 and
-4.9 /rev, the range a root torsion spring of 1e5–2e5 N·m/rad gives the UH-60A blade
-(against 5.1 /rev with a rigid link).
+(h = 0.2 m, about 40 % of the chord, and k = 3e6 N/m) give k h² = 1.2e5 N·m/rad, within the
+1e5–2e5 N·m/rad that the published torsion frequencies suggest (docs/models.md). On the fan
+plot's blade at 27 rad/s they move the torsion-dominated mode from 4.86/rev (rigid link) to
+4.51/rev (5e4 N·m/rad: 4.17/rev; 2e5: 4.72/rev, then mixed with lag 2).
 """
 
 from __future__ import annotations
@@ -56,7 +57,7 @@ from solver.joints import Prismatic
 from solver.model import Model
 from solver.rotations import rotation_about
 from solver.timefunctions import TimeFunction
-from studies.parameters import Param, Parameters
+from studies.parameters import Param, ParameterError
 
 Z = np.array([0.0, 0.0, 1.0])
 # The pitch link's length (m): the rigid linkage's geometry (the stiffness the blade sees is
@@ -74,8 +75,9 @@ PARAMETERS: dict[str, Param] = {
     "pitch_link_stiffness": Param(
         3.0e6, "N m-1", "axial stiffness k of each pitch link, with the servos' and rings' "
         "compliance lumped in (swashplate only); the UH-60A's is not public: with the horn "
-        "k h² = 1.2e5 N m rad-1 about the pitch axis, which puts the blade's first torsion "
-        "mode at about 4.8/rev (5.1/rev with a rigid link)",
+        "k h² = 1.2e5 N m rad-1 about the pitch axis, within the 1e5-2e5 that the UH-60A's "
+        "torsion frequency suggests; it moves the blade's torsion-dominated mode at 27 rad/s "
+        "from 4.86/rev (rigid link) to 4.51/rev",
         minimum=0.0, exclusive_minimum=True, maximum=1e15),
     "pitch_horn_length": Param(
         0.2, "m", "pitch horn arm h: chordwise distance from the pitch axis to the pitch "
@@ -142,11 +144,12 @@ def swashplate_phase(horn: float, hinge_radius: float) -> float:
 
 @dataclass
 class PitchLink:
-    """One blade's linkage: the ring point's massless body, its driven prismatic joint on the
-    hub, the link, and the link's two ends at t = 0 (global, m)."""
+    """One blade's linkage: the ring point's massless body and its driven prismatic joint on
+    the hub (None for a ring fixed to the hub), the link, and the link's two ends at t = 0
+    (global, m)."""
 
-    ring: RigidBody
-    drive: Prismatic
+    ring: RigidBody | None
+    drive: Prismatic | None
     link: AxialSpring
     horn: np.ndarray
     lower: np.ndarray
@@ -154,7 +157,7 @@ class PitchLink:
 
 def add_pitch_link(model: Model, hub, root, k: int, azimuth: float, hinge_radius: float,
                    omega: float, theta_start: float, pitch: TimeFunction | None,
-                   p: Parameters) -> PitchLink:
+                   stiffness: float, horn: float) -> PitchLink:
     """Blade ``k``'s pitch link, rotating-ring point and its drive, added to ``model``.
 
     Parameters
@@ -177,23 +180,44 @@ def add_pitch_link(model: Model, hub, root, k: int, azimuth: float, hinge_radius
     theta_start
         The blade's pitch as built (rad, the controls' reference).
     pitch
-        The commanded pitch θ(t) (rad, absolute), or None for a fixed ring (the fan plot's
-        blade, whose controls are fixed).
-    p
-        Parameters with ``pitch_link_stiffness`` and ``pitch_horn_length``.
+        The commanded pitch θ(t) (rad, absolute), or None for fixed controls: the link's lower
+        end is then a point of the hub itself (the fan plot's blade).
+    stiffness
+        The link's axial stiffness k (N/m), ``pitch_link_stiffness``.
+    horn
+        The horn's arm h (m), ``pitch_horn_length``.
     """
-    h, length = p.pitch_horn_length, PITCH_LINK_LENGTH
+    h, length = horn, PITCH_LINK_LENGTH
     er = np.array([math.cos(azimuth), math.sin(azimuth), 0.0])
     et = np.array([-math.sin(azimuth), math.cos(azimuth), 0.0])
     hinge = hinge_radius * er
     z0 = ring_height(theta_start, h, length)[0]
-    horn = hinge + h * (math.cos(theta_start) * et + math.sin(theta_start) * Z)
     lower = hinge + h * et + (z0 - length) * Z
+    end = hinge + h * (math.cos(theta_start) * et + math.sin(theta_start) * Z)
+    if pitch is None:
+        link = AxialSpring(f"pitch_link{k}", hub, lower, root, end, stiffness=stiffness,
+                           rest_length=length)
+        model.add(link)
+        return PitchLink(None, None, link, end, lower)
     ring = RigidBody(f"ring{k}", 0.0, position=lower, orientation=rotation_about(Z, azimuth),
                      velocity=np.cross(omega * Z, lower), angular_velocity=omega * Z)
     drive = Prismatic(f"ring_drive{k}", hub, ring, point=lower, axis=Z,
-                      driven=None if pitch is None else ring_drive(pitch, h, z0, length))
-    link = AxialSpring(f"pitch_link{k}", ring, lower, root, horn,
-                       stiffness=p.pitch_link_stiffness, rest_length=length)
+                      driven=ring_drive(pitch, h, z0, length))
+    link = AxialSpring(f"pitch_link{k}", ring, lower, root, end, stiffness=stiffness,
+                       rest_length=length)
     model.add(ring, drive, link)
-    return PitchLink(ring, drive, link, horn, lower)
+    return PitchLink(ring, drive, link, end, lower)
+
+
+def check(control_system: str, stiffness: float, horn: float) -> None:
+    """Raise :class:`~studies.parameters.ParameterError` for a control system not among
+    :data:`CONTROL_SYSTEMS` or a link or horn outside its parameter's range (the ranges the
+    rotor's and the fan plot's parameters declare; this check serves direct calls)."""
+    if control_system not in CONTROL_SYSTEMS:
+        raise ParameterError(f"control_system = {control_system!r}: must be one of "
+                             + ", ".join(repr(c) for c in CONTROL_SYSTEMS))
+    for name, value in (("pitch_link_stiffness", stiffness), ("pitch_horn_length", horn)):
+        spec = PARAMETERS[name]
+        if not (math.isfinite(value) and spec.minimum < value <= spec.maximum):
+            raise ParameterError(f"{name} = {value!r} {spec.units}: outside the valid range "
+                                 f"({spec.minimum:g}, {spec.maximum:g}] {spec.units}")
