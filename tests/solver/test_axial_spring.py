@@ -38,7 +38,8 @@ def _swinging(damping: float = 0.0) -> tuple[Model, AxialSpring]:
 @pytest.mark.parametrize("damped", [False, True], ids=["spring", "spring_damper"])
 def test_axial_spring_fd(damped):
     """Gradient, Hessian and the damper's Jacobians against central differences of the
-    element's potential and force, at a random state: measured relative error ≤ 3e-9."""
+    element's potential and force, at a random state: measured 7.5e-11 (gradient), 7.6e-11
+    (Hessian), 1.9e-10 and 5.3e-10 (the damper's ∂f/∂q, ∂f/∂v) of the largest entry."""
     model, link = _swinging(damping=5.0 if damped else 0.0)
     s = System(model)
     st = _set(s, link)
