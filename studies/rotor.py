@@ -1166,8 +1166,10 @@ def simulate(p: Parameters) -> xr.Dataset:
                          data, _Sampler.COLUMNS, omega, nrev, trimmer.thrust_scale),
                      flown),
         # over whole revolutions the kinetic and strain energies repeat, so the mean shaft
-        # power is what the air, the dampers and the pitch links take (tests/studies/
-        # test_rotor_outputs.py checks it against the airloads' power)
+        # power is what the air, the dampers and the pitch links take: the control system's
+        # prescribed motion (the driven pitch bearings, or the swashplate's ring drives) puts
+        # power in (tests/studies/test_rotor_outputs.py and test_swashplate.py check the
+        # balance against the airloads' power)
         "rotor_power": np.float64(col["torque"].mean() * omega),
         "flapping_cosine": np.float64(flap.cos[1]),
         "flapping_sine": np.float64(flap.sin[1]),
