@@ -2,6 +2,7 @@
 
     PYTHONPATH=. python benchmarks/rotor.py --revolutions 2 [--bifilar free] [--scheme ed]
                                              [--inflow peters_he] [--aero-points 2] [--profile]
+                                             [--control-system swashplate]
     PYTHONPATH=. python benchmarks/rotor.py --case [--bifilar free]     # one whole case
     PYTHONPATH=. python benchmarks/rotor.py --case --no-floquet         # without its multipliers
     PYTHONPATH=. python benchmarks/rotor.py --case --no-estimate        # without its step error
@@ -21,7 +22,8 @@ its residuals and the revolutions' ratio (``--coarse``: the coarse case of the t
 steps/rev, 3 elements, 3 settling revolutions, periodic to 5 %, Peters–He alone unless
 ``--inflow`` says otherwise). The third times one update
 of the prescribed wake (Biot–Savart over the revolution's azimuths at blade 0's sections) at
-the model's wake parameters.
+the model's wake parameters. ``--control-system swashplate`` runs any of them with the
+swashplate's pitch links instead of the driven pitch bearings (``prescribed``, the default).
 """
 
 from __future__ import annotations
@@ -58,8 +60,8 @@ def per_revolution(p: Parameters, revolutions: int, profile: bool) -> dict:
     if profiler is not None:
         profiler.stop()
         print(profiler.output_text(unicode=True, color=False, show_all=False))
-    return {"bifilar": p.bifilar, "inflow": p.inflow, "unknowns": system.n,
-            "steps_per_rev": p.steps_per_rev,
+    return {"bifilar": p.bifilar, "inflow": p.inflow, "control_system": p.control_system,
+            "unknowns": system.n, "steps_per_rev": p.steps_per_rev,
             "setup_s": round(setup, 2), "seconds_per_rev": round(loop / revolutions, 2),
             "steps_per_s": round(integ.n_steps / loop, 2),
             "newton_per_step": round(integ.n_iterations / integ.n_steps, 2)}
@@ -125,9 +127,13 @@ def main() -> None:
                    help="with --case: without the step-error estimate and extrapolation")
     a.add_argument("--wake-update", action="store_true",
                    help="time one update of the prescribed wake")
+    a.add_argument("--control-system", default="prescribed",
+                   choices=list(SPEC.parameters["control_system"].choices),
+                   help="driven pitch bearings (prescribed) or the swashplate's pitch links")
     args = a.parse_args()
     given = {"bifilar": args.bifilar, "floquet": not args.no_floquet,
-             "error_estimate": not args.no_estimate, "richardson": not args.no_estimate}
+             "error_estimate": not args.no_estimate, "richardson": not args.no_estimate,
+             "control_system": args.control_system}
     if args.inflow:
         given["inflow"] = args.inflow
     if args.aero_points:

@@ -2,7 +2,8 @@
 
 ::
 
-    bifilar fanplot [--speeds RAD_PER_S ...] [--elements N] --out FILE.nc
+    bifilar fanplot [--speeds RAD_PER_S ...] [--elements N] [--control-system KIND]
+                    [--pitch-link-stiffness N_PER_M] [--pitch-horn-length M] --out FILE.nc
 
 Writes ``frequency`` (Hz) over (``hub_speed`` (rad s-1), ``mode``) with the ``mode_label``
 coordinate, and draws the Campbell diagram next to FILE (``.png`` and ``.pdf``): the computed
@@ -20,11 +21,15 @@ import xarray as xr
 from pipelines.options import OutPath
 from pipelines.single import check_writable, fail, finish_figure, run_single
 from studies.bifilar import HARDWARE
-from studies.fanplot import MAX_SPEED, SPEC
+from studies.fanplot import MAX_SPEED, PARAMETERS, SPEC
 from studies.uh60a import UH60A, bowen_davies_fanplot
 
 # How the case's worker finds the model (it is not in the sweep registry).
 MODEL_REF = "studies.fanplot:SPEC"
+# the control system's parameters, as the rotor declares them (studies.swashplate)
+_CONTROL = PARAMETERS["control_system"]
+_STIFFNESS = PARAMETERS["pitch_link_stiffness"]
+_HORN = PARAMETERS["pitch_horn_length"]
 
 
 def fanplot_figure(ds: xr.Dataset, stem: Path, tuning_order: float) -> list[Path]:
@@ -85,24 +90,38 @@ class _SpeedList(click.ParamType):
 @click.argument("more_speeds", nargs=-1, type=_SpeedList())
 @click.option("--elements", default=6, show_default=True, type=click.IntRange(1, 60),
               help="cubic beam elements from the hinge to the tip")
+@click.option("--control-system", default=_CONTROL.default, show_default=True,
+              type=click.Choice(_CONTROL.choices), help="pitch restraint: prescribed (a rigid "
+              "pitch link) or swashplate (an elastic pitch link on the horn)")
+@click.option("--pitch-link-stiffness", default=_STIFFNESS.default, show_default=True,
+              type=click.FloatRange(_STIFFNESS.minimum, _STIFFNESS.maximum, min_open=True),
+              help=f"{_STIFFNESS.long_name} ({_STIFFNESS.units})")
+@click.option("--pitch-horn-length", default=_HORN.default, show_default=True,
+              type=click.FloatRange(_HORN.minimum, _HORN.maximum, min_open=True),
+              help=f"{_HORN.long_name} ({_HORN.units})")
 @click.option("--tuning-order", default=HARDWARE["tuning_order"].default, show_default=True,
               type=click.FloatRange(0.5, 10.0), help="bifilar tuning order drawn as a line")
 @click.option("--out", required=True, type=OutPath(dir_okay=False, path_type=Path),
               help="netCDF file; the figure is written beside it (.png, .pdf)")
 def fanplot(speeds: tuple[float, ...], more_speeds: tuple[float, ...], elements: int,
+            control_system: str, pitch_link_stiffness: float, pitch_horn_length: float,
             tuning_order: float, out: Path) -> None:
     """Fan plot (Campbell diagram) of one articulated UH-60A blade.
 
     Natural frequencies about the steady spin at each rotor speed, from the linearized
-    multibody model: coincident flap/lag hinges at 0.381 m, lag hinge free (no damper), rigid
-    pitch link, Yeo section properties with the Davis cuff and the structural twist.
+    multibody model: coincident flap/lag hinges at 0.381 m, lag hinge free (no damper), a rigid
+    pitch link (prescribed) or an elastic one on the pitch horn (swashplate: the torsion
+    branch moves with the link's stiffness), Yeo section properties with the Davis cuff and the
+    structural twist.
     """
     if more_speeds and not speeds:
         fail(f"unexpected argument {more_speeds[0]:g}: rotor speeds go after --speeds")
     check_writable(out)
     given = sorted(set(speeds + more_speeds))
     ds = run_single(SPEC, MODEL_REF, {"speeds": " ".join(map(repr, given)),
-                                      "elements": elements}, out)
+                                      "elements": elements, "control_system": control_system,
+                                      "pitch_link_stiffness": pitch_link_stiffness,
+                                      "pitch_horn_length": pitch_horn_length}, out)
     click.echo(str(out))
     for path in fanplot_figure(ds, out.with_suffix(""), tuning_order):
         click.echo(str(path))

@@ -699,3 +699,213 @@ class FrameCouplingSet(ElementSet):
 
 
 FrameCoupling.set_class = FrameCouplingSet
+
+
+# -------------------------------------------------------------------- axial springs (links)
+@dataclass(eq=False)
+class AxialSpring(Element):
+    """A massless two-force member (a link, a rod with a spring and a damper in it) between two
+    body points.
+
+    With Δ = p_b − p_a the separation of the points, ℓ = |Δ| its length and n = Δ/ℓ its
+    direction, the link carries the tension
+
+        T = k (ℓ − ℓ0) + c ℓ̇     (N, positive when it pulls the points together),
+
+    and applies −T n to ``body_b`` at its point and +T n to ``body_a`` at its point (the force
+    always along the current line of the link: it follows the points as they move). The
+    spring's part derives from the potential V = ½ k (ℓ − ℓ0)², the damper's is
+    non-conservative (its work −c ℓ̇² is booked by the integrators).
+
+    Parameters
+    ----------
+    name
+        Unique name.
+    body_a, body_b
+        The bodies (rigid bodies, point masses, prescribed bodies or beam nodes); ``body_a``
+        None is ground.
+    point_a, point_b
+        Global positions of the two attachment points at t = 0 (m); each moves with its body.
+    stiffness
+        Axial stiffness k (N/m), ≥ 0.
+    damping
+        Axial damping c (N·s/m), ≥ 0.
+    rest_length
+        Unstretched length ℓ0 (m), > 0; by default the initial distance of the points.
+    """
+
+    name: str
+    body_a: Body | None
+    point_a: ArrayLike
+    body_b: Body
+    point_b: ArrayLike
+    stiffness: float = 0.0
+    damping: float = 0.0
+    rest_length: float | None = None
+
+    def __post_init__(self) -> None:
+        self.point_a = np.asarray(self.point_a, dtype=float)
+        self.point_b = np.asarray(self.point_b, dtype=float)
+        if self.point_a.shape != (3,) or self.point_b.shape != (3,):
+            raise ValueError(f"axial spring {self.name!r}: point_a and point_b must be 3 "
+                             "numbers (m)")
+        if not (np.isfinite(self.stiffness) and np.isfinite(self.damping)
+                and self.stiffness >= 0 and self.damping >= 0):
+            raise ValueError(f"axial spring {self.name!r}: stiffness = {self.stiffness!r} N/m "
+                             f"and damping = {self.damping!r} N s/m must be finite and ≥ 0")
+        length = (float(np.linalg.norm(self.point_b - self.point_a))
+                  if self.rest_length is None else float(self.rest_length))
+        if not (np.isfinite(length) and length > 0):
+            raise ValueError(f"axial spring {self.name!r}: the rest length {length!r} m must "
+                             "be > 0 (distinct points, or a positive rest_length)")
+        if np.linalg.norm(self.point_b - self.point_a) == 0.0:
+            raise ValueError(f"axial spring {self.name!r}: its points coincide (no direction)")
+        self.length0 = length
+
+    def group_key(self) -> Hashable:
+        return (self.stiffness != 0.0, self.damping != 0.0)
+
+
+class AxialSpringSet(ElementSet):
+    """All axial springs, vectorized.
+
+    Per member the separation is affine in the coordinates y it reads, Δ = P y + b
+    (P = [c_1 I, c_2 I, …], the points' coefficients on positions and directors). With
+    ℓ = |Δ|, n = Δ/ℓ and the projector N = I − n nᵀ:
+
+        ∇V = k (ℓ − ℓ0) Pᵀ n,
+        ∇²V = Pᵀ [k n nᵀ + k (ℓ − ℓ0)/ℓ N] P      (material part k n nᵀ, geometric part the
+                                                  tension's turning with the link),
+        f = −c ℓ̇ Pᵀ n,  ℓ̇ = nᵀ P v,
+        ∂f/∂v = −c Pᵀ n nᵀ P,  ∂f/∂y = −c Pᵀ [ℓ̇ N/ℓ + n Δ̇ᵀ N/ℓ] P.
+
+    The discrete gradient is the midpoint gradient with Gonzalez's correction along Δq (the
+    potential is not quadratic in q), exact: ∇̄V·(q_f − q_i) = V_f − V_i."""
+
+    def __init__(self, elements, system) -> None:
+        super().__init__(elements, system)
+        exprs = []
+        for e in elements:
+            pb = system.point(e.body_b, system.to_local_point(e.body_b, e.point_b))
+            pa = (VecExpr([], e.point_a.copy()) if e.body_a is None
+                  else system.point(e.body_a, system.to_local_point(e.body_a, e.point_a)))
+            exprs.append(pb - pa)
+        nt = max(len(d.terms) for d in exprs)
+        nj = len(elements)
+        coef = np.zeros((nj, nt))
+        ycols = np.zeros((nj, nt), dtype=np.int64)
+        for j, d in enumerate(exprs):
+            for t, (c, o) in enumerate(d.terms):
+                coef[j, t], ycols[j, t] = c, o
+            ycols[j, len(d.terms):] = d.terms[0][1]  # padding: zero coefficient
+        self.idx = (ycols[:, :, None] + np.arange(3)).reshape(nj, 3 * nt)
+        self._P = np.einsum("jt,ik->jitk", coef, np.eye(3)).reshape(nj, 3, 3 * nt)
+        self._b = np.array([d.const for d in exprs])
+        self.k = np.array([e.stiffness for e in elements], dtype=float)
+        self.c = np.array([e.damping for e in elements], dtype=float)
+        self.l0 = np.array([e.length0 for e in elements])
+        flat = self.idx.ravel()
+        pr, pc = _outer_pattern(self.idx)
+        if np.any(self.k):
+            self.grad_idx = flat
+            self.stiff_rows, self.stiff_cols = pr, pc
+        if np.any(self.c):
+            self.force_idx = flat
+            self.fq_rows, self.fq_cols = pr, pc
+            self.fv_rows, self.fv_cols = pr, pc
+            self.nonconservative = True
+
+    # -- kinematics ---------------------------------------------------------------------------
+    def separation(self, q: Array) -> Array:
+        """Δ = p_b − p_a of each member (J, 3), m."""
+        return np.einsum("jik,jk->ji", self._P, q[self.idx]) + self._b
+
+    def _geometry(self, q: Array) -> tuple[Array, Array, Array]:
+        """Δ (J, 3), ℓ (J,), n (J, 3)."""
+        delta = self.separation(q)
+        length = np.linalg.norm(delta, axis=1)
+        return delta, length, delta / length[:, None]
+
+    def rate(self, q: Array, v: Array) -> Array:
+        """ℓ̇ of each member (J,), m/s."""
+        _, _, n = self._geometry(q)
+        return np.einsum("ji,jik,jk->j", n, self._P, v[self.idx])
+
+    def tension(self, q: Array, v: Array) -> Array:
+        """The axial force T = k (ℓ − ℓ0) + c ℓ̇ of each member (J,), N, positive in
+        tension."""
+        _, length, n = self._geometry(q)
+        rate = np.einsum("ji,jik,jk->j", n, self._P, v[self.idx])
+        return self.k * (length - self.l0) + self.c * rate
+
+    def direction(self, q: Array) -> Array:
+        """The unit vector n from point a to point b of each member (J, 3)."""
+        return self._geometry(q)[2]
+
+    # -- potential ------------------------------------------------------------------------------
+    def _energies(self, q: Array) -> Array:
+        _, length, _ = self._geometry(q)
+        return 0.5 * self.k * (length - self.l0) ** 2
+
+    def potential(self, q):
+        if not len(self.grad_idx):
+            return 0.0
+        return float(self._energies(q).sum())
+
+    def _gradient_rows(self, q: Array) -> Array:
+        _, length, n = self._geometry(q)
+        return np.einsum("jik,ji->jk", self._P, (self.k * (length - self.l0))[:, None] * n)
+
+    def gradient(self, q):
+        if not len(self.grad_idx):
+            return EMPTY_F
+        return self._gradient_rows(q).ravel()
+
+    def discrete_gradient(self, qi, qf):
+        if not len(self.grad_idx):
+            return EMPTY_F
+        gm = self._gradient_rows(0.5 * (qi + qf))
+        return gonzalez_rows(gm, self._energies(qi), self._energies(qf),
+                             qf[self.idx] - qi[self.idx]).ravel()
+
+    def _hessians(self, q: Array, geometric: bool) -> Array:
+        _, length, n = self._geometry(q)
+        nn = n[:, :, None] * n[:, None, :]
+        mid = self.k[:, None, None] * nn
+        if geometric:
+            proj = np.eye(3) - nn
+            mid = mid + (self.k * (length - self.l0) / length)[:, None, None] * proj
+        return np.einsum("jik,jil,jlm->jkm", self._P, mid, self._P)
+
+    def stiffness(self, q):
+        if not len(self.grad_idx):
+            return EMPTY_F
+        return self._hessians(q, geometric=True).ravel()
+
+    def material_stiffness(self, q):
+        if not len(self.grad_idx):
+            return EMPTY_F
+        return self._hessians(q, geometric=False).ravel()
+
+    # -- damper ---------------------------------------------------------------------------------
+    def force(self, q, v, t):
+        _, _, n = self._geometry(q)
+        rate = np.einsum("ji,jik,jk->j", n, self._P, v[self.idx])
+        return np.einsum("jik,ji->jk", self._P, (-self.c * rate)[:, None] * n).ravel()
+
+    def force_jacobians(self, q, v, t):
+        _, length, n = self._geometry(q)
+        ddelta = np.einsum("jik,jk->ji", self._P, v[self.idx])
+        rate = np.einsum("ji,ji->j", n, ddelta)
+        proj = np.eye(3) - n[:, :, None] * n[:, None, :]
+        # ∂(ℓ̇ n)/∂Δ = ℓ̇ N/ℓ + n (N Δ̇)ᵀ/ℓ
+        mid_q = (rate[:, None, None] * proj
+                 + n[:, :, None] * np.einsum("jab,jb->ja", proj, ddelta)[:, None, :]
+                 ) / length[:, None, None]
+        jq = -self.c[:, None, None] * np.einsum("jik,jil,jlm->jkm", self._P, mid_q, self._P)
+        nn = n[:, :, None] * n[:, None, :]
+        jv = -self.c[:, None, None] * np.einsum("jik,jil,jlm->jkm", self._P, nn, self._P)
+        return jq.ravel(), jv.ravel()
+
+
+AxialSpring.set_class = AxialSpringSet

@@ -173,16 +173,23 @@ class Orientation(Joint):
 
 @dataclass(eq=False)
 class Prismatic(Joint):
-    """Relative translation along e3 only, no relative rotation (5 rows)."""
+    """Relative translation along e3 only, no relative rotation (5 rows); ``driven``
+    prescribes the translation s(t) (m) of body b's joint point along body a's e3, counted
+    from the initial configuration (one more row, (p_b − p_a)·e3ᵃ − s(t) = 0)."""
+
+    driven: TimeFunction | None = None
 
     def quadratic_rows(self, qb, lay):
         self._need_orientation()
         pa, pb = self._points(lay)
         ja, jb = self._frames(lay)
-        rows = qb.new_rows(2)
+        rows = qb.new_rows(2 + (self.driven is not None))
         r = pb - pa
         qb.add_dot(int(rows[0]), r, ja[0])
         qb.add_dot(int(rows[1]), r, ja[1])
+        if self.driven is not None:
+            qb.add_dot(int(rows[2]), r, ja[2])
+            qb.add_constant(int(rows[2]), -1.0, self.driven)
         return np.concatenate([rows, _rotation_rows(qb, ja, jb, (0, 1, 2))]), {}
 
 

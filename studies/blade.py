@@ -4,8 +4,12 @@ The blade (``studies.uh60a``: Yeo's section properties with the Davis cuff) is a
 geometrically exact beam of cubic elements from the hinge to the tip, on a hub spinning about
 +z (counter-clockwise seen from above, as the UH-60A). The hinge arrangement: flap and lag
 revolutes at one point e = 0.381 m, flap first going outboard, joined by a massless link; the
-pitch bearing is locked (rigid pitch link, the reference arrangement for the published
-frequencies), and the lag hinge has neither damper nor spring (undamped frequencies).
+pitch bearing is locked (``control_system = "prescribed"``: a rigid pitch link, the reference
+arrangement for the published frequencies) or free and held by an elastic pitch link on a horn
+(``"swashplate"``: :mod:`studies.swashplate` at fixed controls, the link's lower end on the
+hub), and the lag hinge has neither damper nor spring (undamped frequencies). The pitch link's
+stiffness k on the horn's arm h restrains the root's pitch by k h² (N·m/rad): the torsion
+branch falls with it.
 
 The fan plot (Campbell diagram) is the set of natural frequencies of the linearized model about
 its steady spin at each rotor speed (:func:`solver.modes.natural_frequencies`, rotating frame).
@@ -28,6 +32,7 @@ from solver.joints import Revolute
 from solver.model import Model
 from solver.modes import Modes, natural_frequencies
 from solver.system import System
+from studies import swashplate
 from studies.uh60a import UH60A, blade_sections, blade_twist, section_origin
 
 Array = NDArray[np.float64]
@@ -36,10 +41,16 @@ FANPLOT_MODES = ("flap 1", "flap 2", "flap 3", "flap 4", "lag 1", "lag 2", "tors
 TRACK_STEP = 0.1  # of Ω_ref: modes are named at this speed and followed in such steps
 TRACKED_EXTRA = 6  # modes followed beyond the reported ones (room for branches to cross)
 DEFAULT_SPEED_RATIOS = np.round(np.arange(0.0, 1.21, 0.1), 10)  # of Ω_ref = 27 rad/s
+# the control system's defaults (studies.swashplate.PARAMETERS)
+CONTROL_SYSTEM = swashplate.PARAMETERS["control_system"].default
+PITCH_LINK_STIFFNESS = swashplate.PARAMETERS["pitch_link_stiffness"].default
+PITCH_HORN_LENGTH = swashplate.PARAMETERS["pitch_horn_length"].default
 
 
-def articulated_blade(speed: float, *, n_elements: int = 6, twist: bool = True) -> tuple[
-        Model, Beam]:
+def articulated_blade(speed: float, *, n_elements: int = 6, twist: bool = True,
+                      control_system: str = CONTROL_SYSTEM,
+                      pitch_link_stiffness: float = PITCH_LINK_STIFFNESS,
+                      pitch_horn_length: float = PITCH_HORN_LENGTH) -> tuple[Model, Beam]:
     """One articulated UH-60A blade on a hub spinning at ``speed`` (rad/s) about +z.
 
     Parameters
@@ -51,6 +62,13 @@ def articulated_blade(speed: float, *, n_elements: int = 6, twist: bool = True) 
     twist
         Include the built-in structural twist of the section axes (couples flap, lag and
         torsion); without it the blade's section axes are those of the rotor plane.
+    control_system
+        ``"prescribed"``: the pitch bearing locked (rigid pitch link); ``"swashplate"``: the
+        pitch bearing free, a pitch link from the horn to the hub (at zero collective).
+    pitch_link_stiffness
+        The pitch link's axial stiffness k (N/m), with ``"swashplate"``.
+    pitch_horn_length
+        The pitch horn's arm h (m), with ``"swashplate"``.
 
     Returns
     -------
@@ -60,6 +78,7 @@ def articulated_blade(speed: float, *, n_elements: int = 6, twist: bool = True) 
         raise ValueError(f"rotor speed = {speed!r} rad/s must be ≥ 0")
     if not (isinstance(n_elements, int | np.integer) and 1 <= n_elements <= 60):
         raise ValueError(f"n_elements = {n_elements!r} must be an integer in 1…60")
+    swashplate.check(control_system, pitch_link_stiffness, pitch_horn_length)
     e = section_origin(include_cuff=True)  # hinge radius (m): the beam starts there
     hinge = np.array([e, 0.0, 0.0])
     if twist:
@@ -76,11 +95,24 @@ def articulated_blade(speed: float, *, n_elements: int = 6, twist: bool = True) 
     # flap hinge about the chordwise axis (y at azimuth 0), then the lag hinge about z,
     # joined by a massless link whose rotation both hinges fix
     link = RigidBody("flap_link", 0.0, position=hinge, angular_velocity=(0.0, 0.0, speed))
+    if control_system == "prescribed":
+        model = Model([
+            hub, link, blade,
+            Revolute("flap", hub, link, point=hinge, axis=(0.0, 1.0, 0.0)),
+            Revolute("lag", link, blade.root, point=hinge, axis=(0.0, 0.0, 1.0)),
+        ])
+        return model, blade
+    # the free pitch bearing outboard of the lag hinge (a second massless link between them),
+    # the blade held in pitch by the link from its horn down to the hub
+    lag_link = RigidBody("lag_link", 0.0, position=hinge, angular_velocity=(0.0, 0.0, speed))
     model = Model([
-        hub, link, blade,
+        hub, link, lag_link, blade,
         Revolute("flap", hub, link, point=hinge, axis=(0.0, 1.0, 0.0)),
-        Revolute("lag", link, blade.root, point=hinge, axis=(0.0, 0.0, 1.0)),
+        Revolute("lag", link, lag_link, point=hinge, axis=(0.0, 0.0, 1.0)),
+        Revolute("pitch", lag_link, blade.root, point=hinge, axis=(1.0, 0.0, 0.0)),
     ])
+    swashplate.add_pitch_link(model, hub, blade.root, 0, 0.0, e, float(speed), 0.0, None,
+                              pitch_link_stiffness, pitch_horn_length)
     return model, blade
 
 
@@ -109,7 +141,9 @@ def classify(modes: Modes, system: System, beam: Beam) -> list[str]:
     return labels
 
 def fanplot(speeds: ArrayLike | None = None, *, n_elements: int = 6,
-            modes: tuple[str, ...] = FANPLOT_MODES) -> xr.Dataset:
+            modes: tuple[str, ...] = FANPLOT_MODES, control_system: str = CONTROL_SYSTEM,
+            pitch_link_stiffness: float = PITCH_LINK_STIFFNESS,
+            pitch_horn_length: float = PITCH_HORN_LENGTH) -> xr.Dataset:
     """Natural frequencies of the articulated UH-60A blade against rotor speed.
 
     Parameters
@@ -120,6 +154,9 @@ def fanplot(speeds: ArrayLike | None = None, *, n_elements: int = 6,
         Beam elements, hinge to tip.
     modes
         Mode labels to report.
+    control_system, pitch_link_stiffness, pitch_horn_length
+        The pitch restraint (:func:`articulated_blade`): a rigid pitch link, or an elastic
+        one of stiffness k (N/m) on a horn of arm h (m).
 
     Returns
     -------
@@ -135,6 +172,10 @@ def fanplot(speeds: ArrayLike | None = None, *, n_elements: int = 6,
     if sp.ndim != 1 or not len(sp) or not np.all(np.isfinite(sp)) or np.any(sp < 0):
         raise ValueError(f"speeds = {speeds!r} must be rotor speeds ≥ 0 rad/s")
     sp = np.unique(sp)
+    swashplate.check(control_system, pitch_link_stiffness, pitch_horn_length)
+    restraint = {"control_system": control_system,
+                 "pitch_link_stiffness": pitch_link_stiffness,
+                 "pitch_horn_length": pitch_horn_length}
     # modes are named at a low speed, where they keep the character of the non-rotating
     # blade's modes, and followed by their shapes in steps of at most TRACK_STEP: the
     # conventional branches of a fan plot, which keep their names through veerings
@@ -142,7 +183,7 @@ def fanplot(speeds: ArrayLike | None = None, *, n_elements: int = 6,
     path = np.unique(np.concatenate([sp, np.arange(1, int(np.ceil(sp.max() / step)) + 1) * step]))
     runs = []
     for omega in path:
-        model, beam = articulated_blade(float(omega), n_elements=n_elements)
+        model, beam = articulated_blade(float(omega), n_elements=n_elements, **restraint)
         s = System(model)
         spin = Spin(float(omega), (0.0, 0.0, 1.0)) if omega else None
         md = natural_frequencies(s, spin=spin)
@@ -177,8 +218,11 @@ def fanplot(speeds: ArrayLike | None = None, *, n_elements: int = 6,
     ds.attrs.update(
         title="UH-60A articulated blade fan plot",
         model=(f"{n_elements} cubic geometrically exact beam elements, hinge to tip; coincident "
-               "flap/lag hinges at the hinge radius, lag hinge free, pitch link rigid; Yeo "
-               "section properties with the Davis cuff; structural twist"),
+               "flap/lag hinges at the hinge radius, lag hinge free, "
+               + ("pitch link rigid" if control_system == "prescribed" else
+                  f"pitch bearing free, pitch link of {pitch_link_stiffness:g} N/m on a "
+                  f"{pitch_horn_length:g} m horn")
+               + "; Yeo section properties with the Davis cuff; structural twist"),
         reference_speed=UH60A.omega_ref,
     )
     return ds

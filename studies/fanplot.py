@@ -11,6 +11,7 @@ import math
 
 import xarray as xr
 
+from studies import swashplate
 from studies.parameters import ModelSpec, Output, Param, ParameterError, Parameters
 
 # Highest rotor speed (rad/s): well past any rotor's overspeed; the data set is for 27 rad/s.
@@ -21,6 +22,8 @@ PARAMETERS: dict[str, Param] = {
                     "the reference speed in steps of 0.1 times it)"),
     "elements": Param(6, "1", "cubic beam elements from the hinge to the tip", minimum=1,
                       maximum=60),
+    # the rotor's control system (the same parameters): prescribed = a rigid pitch link
+    **swashplate.PARAMETERS,
 }
 
 OUTPUTS: dict[str, Output] = {
@@ -56,7 +59,10 @@ def simulate(p: Parameters) -> xr.Dataset:
     """Natural frequencies over (hub_speed, mode), as :func:`studies.blade.fanplot`."""
     from studies.blade import fanplot
 
-    return fanplot(speeds_of(p.speeds) or None, n_elements=p.elements)
+    return fanplot(speeds_of(p.speeds) or None, n_elements=p.elements,
+                   control_system=p.control_system,
+                   pitch_link_stiffness=p.pitch_link_stiffness,
+                   pitch_horn_length=p.pitch_horn_length)
 
 
 SPEC = ModelSpec("fanplot", PARAMETERS, simulate, check,

@@ -21,11 +21,16 @@ The model, built from solver parts:
   structural twist), each ``blade_elements`` cubic beam elements from the hinge to the tip,
   at ψ_k = ψ + kπ/2; coincident flap (about the chordwise axis) and lag (about the shaft axis)
   revolutes at the hinge radius e = 0.381 m joined by massless links, then the pitch bearing,
-  a revolute about the span axis driven by the swashplate: θ_k = θ0 + θc cos ψ_k + θs sin ψ_k
-  (no swashplate phase, no pitch-link flexibility, no δ3). The collective is measured in the
-  twist reference of the Dymore deck (aero twist zero at 0.69R), the one consistent with a
-  loaded rotor. A linear rotational lag damper on each lag hinge (GenHel's 1500 lb·s/ft stroke
-  damper in rotational form, 1.07 kN·m·s/rad); no lag spring (the fan plot's free hinge).
+  a revolute about the span axis. With ``control_system = "prescribed"`` it is driven through
+  the commanded pitch θ_k = θ0 + θc cos ψ_k + θs sin ψ_k (no linkage, no pitch-link
+  flexibility, no δ3); with ``"swashplate"`` it is free and a pitch horn, an elastic pitch
+  link and the rotating ring's point driven along the shaft hold the blade
+  (:mod:`studies.swashplate`: the ring's strokes from the rigid linkage's exact inverse
+  kinematics at the commanded pitch, so θ0, θc, θs keep their meaning). The collective is
+  measured in the twist reference of the Dymore deck (aero twist zero at 0.69R), the one
+  consistent with a loaded rotor. A linear rotational lag damper on each lag hinge (GenHel's
+  1500 lb·s/ft stroke damper in rotational form, 1.07 kN·m·s/rad); no lag spring (the fan
+  plot's free hinge).
 * aerodynamics — a :class:`~solver.lifting_line.LiftingLine` on each blade (Peters
   finite-state sections: lift slope 5.73 /rad, c_d0 0.008, the deck's chord and aero twist,
   tip loss 0.95R) and one Peters–He :class:`~solver.inflow.DynamicInflow` (``inflow_harmonics``)
@@ -101,7 +106,7 @@ from solver.system import System
 from solver.timefunctions import linear
 from solver.turning import TurningParts
 from solver.vortex_kernels import induced_velocity
-from studies import periodic, rotor_wake, trim
+from studies import periodic, rotor_wake, swashplate, trim
 from studies.absorbers import N_BIFILARS, AbsorberProbe, add_absorbers, holes_for, pin_damping
 from studies.absorbers import OUTPUTS as ABSORBER_OUTPUTS
 from studies.absorbers import PARAMETERS as ABSORBERS
@@ -229,6 +234,7 @@ PARAMETERS: dict[str, Param] = {
     "shaft_tilt": Param(3.0, "degree", "forward shaft tilt (free stream blowing down through "
                         "the disk)", minimum=-15.0, maximum=15.0),
     **trim.PARAMETERS,
+    **swashplate.PARAMETERS,
     "air_density": Param(1.225, "kg m-3", "air density", minimum=0.1, maximum=2.0),
     "blade_elements": Param(6, "1", "cubic beam elements per blade, hinge to tip", minimum=2,
                             maximum=20),
@@ -371,6 +377,11 @@ OUTPUTS: dict[str, Output] = {
     "blade_root_axial": Output("N", "blade 0 root axial force", history=True, harmonics=True),
     "blade_root_torsion": Output("N m", "blade 0 root torsion (pitch-link moment)",
                                  history=True, harmonics=True),
+    "pitch_link_load": Output("N", "blade 0 pitch-link axial force, tension positive (with "
+                              "the prescribed control system, the load a rigid link on the "
+                              "horn would carry: the root torsion over the linkage's arm, "
+                              "pitch_horn_length times about cos θ)",
+                              history=True, harmonics=True),
     "fuselage_moment_fixed": Output(
         "N m", "fuselage-beam root bending moments (M11, M22), fixed frame",
         components=("fuselage_moment_x_fixed", "fuselage_moment_y_fixed")),
@@ -474,11 +485,13 @@ def add_blade(model: Model, hub, k: int, p: Parameters, damping_factor: float = 
               controls: trim.ControlSchedule | None = None
               ) -> tuple[Beam, RelativeRotation]:
     """Blade ``k`` (azimuth kπ/2 at t = 0) on ``hub`` (a body spinning at ``hub_speed`` about
-    +z, frame = identity at t = 0): flap, lag and driven pitch revolutes at the hinge, joined
+    +z, frame = identity at t = 0): flap, lag and pitch revolutes at the hinge, joined
     by massless links, and the lag damper (× ``damping_factor``; with ``feedback``, the gains
     of :func:`lag_feedback_gains`, also the delayed feedback). The pitch follows the
     parameters' controls, or ``controls`` (a trim's schedule; the blade is built at the
-    parameters' pitch either way, so a rebuilt model takes the same state). Returns (beam,
+    parameters' pitch either way, so a rebuilt model takes the same state): through the
+    driven pitch bearing, or with ``control_system = "swashplate"`` through the pitch link
+    and its ring point (:func:`studies.swashplate.add_pitch_link`). Returns (beam,
     damper)."""
     omega = p.hub_speed
     e = section_origin(include_cuff=True)
@@ -491,7 +504,9 @@ def add_blade(model: Model, hub, k: int, p: Parameters, damping_factor: float = 
     # counted from the built configuration
     given = trim.schedule(p)
     theta_start = given.pitch(psi, reference=0.0).value(0.0)
-    driven = (given if controls is None else controls).pitch(psi, reference=theta_start)
+    schedule = given if controls is None else controls
+    driven = schedule.pitch(psi, reference=theta_start)
+    linked = p.control_system == "swashplate"
 
     def twist(s):  # structural twist, the blade built at its pitch at t = 0
         return np.interp(np.asarray(s) + e, r_tw, tw_s) + theta_start
@@ -513,7 +528,11 @@ def add_blade(model: Model, hub, k: int, p: Parameters, damping_factor: float = 
               Revolute(f"flap{k}", hub, flap_link, point=hinge, axis=et),
               Revolute(f"lag{k}", flap_link, lag_link, point=hinge, axis=Z),
               Revolute(f"pitch{k}", lag_link, blade.root, point=hinge, axis=er,
-                       driven=driven))
+                       driven=None if linked else driven))
+    if linked:  # the pitch bearing free, the blade held by its pitch link
+        swashplate.add_pitch_link(model, hub, blade.root, k, psi, e, omega, theta_start,
+                                  schedule.pitch(psi, reference=0.0), p.pitch_link_stiffness,
+                                  p.pitch_horn_length)
     if p.lag_damping > 0 or damper.feedback:
         model.add(damper)
     return blade, damper
@@ -749,8 +768,8 @@ def periodic_floors(p: Parameters) -> tuple[float, float, float, float]:
 
 
 # blade k's columns in a row of _Sampler (k > 0: suffixed _k): root shears, axial force,
-# torsion and flap angle
-_BLADE_COLUMNS = ("v3", "v2", "n1", "t1", "flap")
+# torsion, flap angle and pitch-link tension (zero without pitch links)
+_BLADE_COLUMNS = ("v3", "v2", "n1", "t1", "flap", "link")
 
 
 class _Sampler:
@@ -767,7 +786,7 @@ class _Sampler:
 
     BLADE_COLUMNS = _BLADE_COLUMNS
     COLUMNS = ("t", "x", "y", "fx", "fy", "fz", "m11", "m22", "cmx", "cmy", "thrust", "lam0",
-               "v3", "v2", "n1", "t1", "mhx", "mhy", "torque", "flap",
+               "v3", "v2", "n1", "t1", "mhx", "mhy", "torque", "flap", "link",
                *(f"{c}_{k}" for k in range(1, N_BLADES) for c in _BLADE_COLUMNS))
 
     def __init__(self, system: System, parts: RotorParts, record_wake: bool = True) -> None:
@@ -787,27 +806,47 @@ class _Sampler:
         # the drive (shaft to hub) and each blade's flap hinge (hub to its flap link)
         self.drive = joints["rotor"]
         self.flap = [joints[f"flap{k}"] for k in range(N_BLADES)]
+        # the pitch links (control_system = "swashplate"): their set, each blade's member and
+        # the horn's end on the root section
+        links = [joints.get(f"pitch_link{k}") for k in range(N_BLADES)]
+        self.links = None
+        if links[0] is not None:
+            self.links = next(st for st in system.sets if links[0] in st.elements)
+            self.link_member = [self.links.elements.index(li) for li in links]
+            self.horn = [system.point(b.root, system.to_local_point(b.root, li.point_b))
+                         for b, li in zip(parts.blades, links, strict=True)]
         self.o_blade_root = [system.offset[b.root] for b in parts.blades]
         self.o_shaft = system.offset[parts.shaft]
         self.o_inflow = system.offset[parts.inflow]
         self.o_blade_tip = system.offset[parts.blades[0].tip]
         self.absorbers = AbsorberProbe(system, parts.absorbers, parts.hub)
 
-    def blade(self, integ, k: int) -> tuple[float, float, float, float, float]:
+    def blade(self, integ, k: int) -> tuple[float, float, float, float, float, float]:
         """Blade k's root shears (flapwise v3, chordwise v2), axial force n1 and torsion t1,
-        in its root section's axes (N, N m), and its flap angle (degree, positive up)."""
+        in its root section's axes (N, N m), its flap angle (degree, positive up) and its
+        pitch link's tension (N; zero without pitch links)."""
         s, q = self.s, integ.q
         # the bearing's force and moment on the blade, in the root section's axes (d1, d2,
         # d3); the section's stress resultant is their opposite
         force, moment = s.reaction(self.pitch[k], q, integ.lam, integ.t)
         o = self.o_blade_root[k]
+        tension = 0.0
+        if self.links is not None:
+            # the free bearing carries no pitch moment: the link's pull −T n at the horn's end
+            # (n from the ring up to the horn) joins the bearing's load on the root, its
+            # moment about the root node (the bearing's point) the torsion
+            j = self.link_member[k]
+            tension = float(self.links.tension(q, integ.v)[j])
+            pull = -tension * self.links.direction(q)[j]
+            force = force + pull
+            moment = moment + np.cross(self.horn[k].value(q) - q[o : o + 3], pull)
         d_root = q[o + 3 : o + 12].reshape(3, 3)
         n1, v2, v3 = -(d_root @ force)
         t1 = -(d_root[0] @ moment)
         # the flap hinge's relative rotation is right-handed about the blade's lead direction
         # (the hub's tangential axis), which turns the blade down: β up is its opposite
         beta = -s.joint_angle(self.flap[k], q)
-        return v3, v2, n1, t1, math.degrees(beta)
+        return v3, v2, n1, t1, math.degrees(beta), tension
 
     def __call__(self, integ) -> np.ndarray:
         s, q, v, parts = self.s, integ.q, integ.v, self.parts
@@ -849,7 +888,7 @@ class _Sampler:
         else:
             lam0 = parts.inflow.mean_inflow(q[self.o_inflow : self.o_inflow
                                               + parts.inflow.n_states])
-        v3, v2, n1, t1, flap = self.blade(integ, 0)
+        v3, v2, n1, t1, flap, link = self.blade(integ, 0)
         others = [x for k in range(1, N_BLADES) for x in self.blade(integ, k)]
         # the drive's moment on the hub about the shaft axis (the shaft head's d3, tilting
         # with the fuselage-beam): the shaft torque; the joint prescribes the hub's rotation
@@ -858,7 +897,7 @@ class _Sampler:
         torque = drive @ q[self.o_shaft + 9 : self.o_shaft + 12]
         return np.array([integ.t, x[0], x[1], f_top[0], f_top[1], f_top[2], m11, m22,
                          cm[0], cm[1], thrust, lam0, v3, v2, n1, t1, m_top[0], m_top[1],
-                         torque, flap, *others, *np.degrees(phis), *stations])
+                         torque, flap, link, *others, *np.degrees(phis), *stations])
 
 
 # each blade's columns of _Sampler's rows (rows of the index: blades 0 … 3), and the pins'
@@ -1209,6 +1248,12 @@ def simulate(p: Parameters) -> xr.Dataset:
         "hub_moment_x_fixed": col["mhx"],
         "hub_moment_y_fixed": col["mhy"],
         "flap_angle": col["flap"],
+        # tension positive; without links, the load a rigid link on the horn would carry:
+        # the root torsion over the rigid linkage's arm at blade 0's commanded pitch
+        "pitch_link_load": (col["link"] if p.control_system == "swashplate"
+                            else col["t1"] / swashplate.horn_arm(
+                                np.array([controls.pitch(0.0, 0.0).value(x) for x in t]),
+                                p.pitch_horn_length)),
     }
     # blade 0's first flap harmonics on its azimuth ψ = Ωt (the recording starts at ψ0)
     flap = harmonics(col["flap"], nrev, p.revolutions, 1, psi0=omega * float(t[0]))
@@ -1242,8 +1287,10 @@ def simulate(p: Parameters) -> xr.Dataset:
                          data, _Sampler.COLUMNS, omega, nrev, trimmer.thrust_scale),
                      flown),
         # over whole revolutions the kinetic and strain energies repeat, so the mean shaft
-        # power is what the air, the dampers and the pitch links take (tests/studies/
-        # test_rotor_outputs.py checks it against the airloads' power)
+        # power is what the air, the dampers and the pitch links take: the control system's
+        # prescribed motion (the driven pitch bearings, or the swashplate's ring drives) puts
+        # power in (tests/studies/test_rotor_outputs.py and test_swashplate.py check the
+        # balance against the airloads' power)
         "rotor_power": np.float64(col["torque"].mean() * omega),
         "flapping_cosine": np.float64(flap.cos[1]),
         "flapping_sine": np.float64(flap.sin[1]),
@@ -1293,14 +1340,15 @@ def _multipliers(p: Parameters, integ, system: System, parts: RotorParts
 
 
 def _spinning(system: System, parts: RotorParts) -> tuple[list[list[Any]], list[Any]]:
-    """The state owners of each sector (blade j: its hinge links, beam and airloads;
+    """The state owners of each sector (blade j: its hinge links, beam, airloads and ring
+    point;
     bifilar j's parts) and the spinning owners in no sector (the hub, the equivalent's
     rigid mass)."""
     names = {getattr(b.owner, "name", ""): b.owner for b in system.layout.blocks}
     sectors = []
     for j in range(N_BLADES):
-        own = [names[f"{x}{j}"] for x in ("flap_link", "lag_link", "blade", "airloads")
-               if f"{x}{j}" in names]
+        own = [names[f"{x}{j}"] for x in ("flap_link", "lag_link", "blade", "airloads",
+                                          "ring") if f"{x}{j}" in names]
         own += [o for n, o in names.items() if n.startswith(f"b{j}_")]
         sectors.append(own)
     rotating = [parts.hub]
@@ -1414,6 +1462,6 @@ def _check(p: Parameters) -> Parameters | None:
 SPEC = ModelSpec("rotor", PARAMETERS, simulate, _check,
                  description="four-bladed elastic UH-60 rotor with aerodynamics and four "
                              "bifilars on a fuselage-beam",
-                 outputs=OUTPUTS, version="10",
+                 outputs=OUTPUTS, version="11",
                  # the two parts take about as long to compile (curve joints / the rest)
                  warm_up=(partial(compile_bifilar, "galpha"), compile_kernels))

@@ -105,3 +105,26 @@ def test_blade_steady_spin_at_every_default_speed():
         model, _ = articulated_blade(float(omega))
         eq = equilibrium(model, spin=Spin(float(omega), (0.0, 0.0, 1.0)))
         assert eq.converged, (omega, eq.message)
+
+
+@pytest.mark.slow
+def test_fanplot_command_takes_the_control_system(tmp_path):
+    """``--control-system swashplate`` with a soft pitch link (k h² = 1.2e4 N·m/rad, below
+    the blade's GJ/L ≈ 1e4 N·m/rad) lowers the torsion branch below the rigid link's (two
+    elements, one speed: the parameters' path, not the accuracy, which
+    tests/studies/test_swashplate.py checks); a negative stiffness is one line."""
+    runner = CliRunner()
+    freq = {}
+    for name, extra in (("rigid", []), ("link", ["--control-system", "swashplate",
+                                                 "--pitch-link-stiffness", "3e5"])):
+        out = tmp_path / f"{name}.nc"
+        res = runner.invoke(main, ["fanplot", "--speeds", "2.7", "--elements", "2", *extra,
+                                   "--out", str(out)])
+        assert res.exit_code == 0, res.output
+        ds = xr.open_dataset(out)
+        freq[name] = float(ds.frequency.values[0, list(ds.mode_label.values).index(
+            "torsion 1")])
+    assert freq["link"] < 0.9 * freq["rigid"]
+    res = runner.invoke(main, ["fanplot", "--pitch-link-stiffness", "-1", "--out",
+                               str(tmp_path / "bad.nc")])
+    assert res.exit_code == 2 and "Traceback" not in res.output
