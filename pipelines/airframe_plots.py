@@ -63,6 +63,14 @@ def _cases(ds: xr.Dataset) -> list[tuple[str, dict[str, int], str]]:
     return out
 
 
+def station_vibration(ds: xr.Dataset, sel: dict[str, int], harmonic: int = HARMONIC
+                      ) -> np.ndarray:
+    """The vibration (g) at each station of one case: the magnitude of the ``harmonic``-th
+    harmonic of the station's acceleration vector, √(Σ over x, y, z of its amplitude²)."""
+    amp = _case_value(ds, "station_acceleration_amplitude", sel).sel(harmonic=harmonic)
+    return np.sqrt((amp.transpose("station", "direction").values ** 2).sum(axis=1)) / G0
+
+
 def _case_value(ds: xr.Dataset, name: str, sel: dict[str, int]) -> xr.DataArray:
     var = ds[name]
     return var.isel({d: i for d, i in sel.items() if d in var.dims})
@@ -134,8 +142,7 @@ def airframe_figures(ds: xr.Dataset, out_dir: Path, formats: Sequence[str]) -> l
 
         for i, ((label, sel), style) in enumerate(zip(modal, _styles(len(modal)),
                                                       strict=True)):
-            amp = _case_value(ds, "station_acceleration_amplitude", sel).sel(harmonic=HARMONIC)
-            g = np.sqrt((amp.transpose("station", "direction").values ** 2).sum(axis=1)) / G0
+            g = station_vibration(ds, sel)
             ax.bar(x - 0.4 + (i + 0.5) * width, g, width, label=label, color=style["color"],
                    edgecolor="black", linewidth=0.5)
         ax.set_xticks(x, stations)
