@@ -3,6 +3,7 @@
     PYTHONPATH=. python benchmarks/rotor.py --revolutions 2 [--bifilar free] [--scheme ed]
                                              [--inflow peters_he] [--aero-points 2] [--profile]
                                              [--control-system swashplate]
+                                             [--fuselage modal] [--fuselage-modes FILE]
     PYTHONPATH=. python benchmarks/rotor.py --case [--bifilar free]     # one whole case
     PYTHONPATH=. python benchmarks/rotor.py --case --no-floquet         # without its multipliers
     PYTHONPATH=. python benchmarks/rotor.py --case --no-estimate        # without its step error
@@ -23,7 +24,9 @@ steps/rev, 3 elements, 3 settling revolutions, periodic to 5 %, Peters–He alon
 ``--inflow`` says otherwise). The third times one update
 of the prescribed wake (Biot–Savart over the revolution's azimuths at blade 0's sections) at
 the model's wake parameters. ``--control-system swashplate`` runs any of them with the
-swashplate's pitch links instead of the driven pitch bearings (``prescribed``, the default).
+swashplate's pitch links instead of the driven pitch bearings (``prescribed``, the default);
+``--fuselage modal`` on the modal airframe (``--fuselage-modes``: its file, default the shipped
+UH-60A-class one) instead of the fuselage-beam.
 """
 
 from __future__ import annotations
@@ -61,7 +64,7 @@ def per_revolution(p: Parameters, revolutions: int, profile: bool) -> dict:
         profiler.stop()
         print(profiler.output_text(unicode=True, color=False, show_all=False))
     return {"bifilar": p.bifilar, "inflow": p.inflow, "control_system": p.control_system,
-            "unknowns": system.n, "steps_per_rev": p.steps_per_rev,
+            "fuselage": p.fuselage, "unknowns": system.n, "steps_per_rev": p.steps_per_rev,
             "setup_s": round(setup, 2), "seconds_per_rev": round(loop / revolutions, 2),
             "steps_per_s": round(integ.n_steps / loop, 2),
             "newton_per_step": round(integ.n_iterations / integ.n_steps, 2)}
@@ -130,10 +133,15 @@ def main() -> None:
     a.add_argument("--control-system", default="prescribed",
                    choices=list(SPEC.parameters["control_system"].choices),
                    help="driven pitch bearings (prescribed) or the swashplate's pitch links")
+    a.add_argument("--fuselage", default="beam", choices=list(SPEC.parameters["fuselage"].choices),
+                   help="the fuselage-beam (beam) or a modal airframe (modal)")
+    a.add_argument("--fuselage-modes", default="",
+                   help="the modal airframe file (default: the shipped UH-60A-class one)")
     args = a.parse_args()
     given = {"bifilar": args.bifilar, "floquet": not args.no_floquet,
              "error_estimate": not args.no_estimate, "richardson": not args.no_estimate,
-             "control_system": args.control_system}
+             "control_system": args.control_system, "fuselage": args.fuselage,
+             "fuselage_modes": args.fuselage_modes}
     if args.inflow:
         given["inflow"] = args.inflow
     if args.aero_points:

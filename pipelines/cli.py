@@ -5,7 +5,7 @@
     bifilar sweep STUDY.toml --out DIR [--workers N | --scheduler ADDRESS | --cluster slurm|pbs]
                   [--worker-timeout SECONDS] [--retry-failed] [--quiet]
     bifilar plot ARCHIVE --out DIR [--format png --format pdf]
-    bifilar run [--out DIR] [--model rotor|hub] [--study table1|envelope]
+    bifilar run [--out DIR] [--model rotor|hub] [--study table1|envelope|jump|airframe]
                 [--workers N | --scheduler ADDRESS | --cluster …]
     bifilar collar --curve circle|cycloid --theta0 DEG --out FILE.nc   (or --figures DIR)
     bifilar pendulum --amplitude DEG --out FILE.nc                    (or --figures DIR)
@@ -64,10 +64,12 @@ STUDIES: dict[str, dict[str, str]] = {
     "table1": BUILT_IN_STUDIES,
     "envelope": {"rotor": "envelope_study.toml"},
     "jump": {"hub": "jump_study.toml"},
+    "airframe": {"rotor": "airframe_study.toml"},
 }
 # Why a built-in study runs on one model only (the error's reason).
 ONE_MODEL_ONLY = {"envelope": "the hub model has no trim",
-                  "jump": "its branches follow the hub's exact swing equations"}
+                  "jump": "its branches follow the hub's exact swing equations",
+                  "airframe": "the hub model has no airframe or swashplate"}
 EXIT_INTERRUPTED = 130
 
 # Errors whose message tells the user what to fix; anything else is a bug and keeps its traceback.
@@ -87,7 +89,9 @@ def default_study(model: str | None = None, study: str = "table1") -> Traversabl
         ``envelope``: the rotor with propulsive trim over airspeed and rotor speed
         (``studies/envelope_study.toml``, rotor only); ``jump``: the hub's free bifilars
         continued in the 3P excitation, circle, cycloid and epicycloid holes
-        (``studies/jump_study.toml``, hub only).
+        (``studies/jump_study.toml``, hub only); ``airframe``: Table 1's cases 0–2 on the
+        paper's model and on the modal airframe with a swashplate, and hole shapes
+        (``studies/airframe_study.toml``, rotor only).
 
     Returns
     -------
@@ -326,7 +330,9 @@ def plot(archive: Path, out_dir: Path, formats: tuple[str, ...]) -> None:
                    "studies/envelope_study.toml, 33 cases); jump: the hub's free bifilars "
                    "continued in the 3P excitation with their stability and backbones, "
                    "circle, cycloid and epicycloid holes (hub model only; "
-                   "studies/jump_study.toml).")
+                   "studies/jump_study.toml); airframe: Table 1's cases 0-2 on the paper's "
+                   "model and on the UH-60A-class modal airframe with a swashplate, and hole "
+                   "shapes (rotor model only; studies/airframe_study.toml, 8 cases).")
 @workers_option
 @scheduler_option
 @cluster_option
@@ -337,7 +343,8 @@ def run(ctx: click.Context, out_dir: Path, model: str | None, study_name: str,
         scheduler: str | None, cluster: str | None, worker_timeout: float | None) -> None:
     """Run a built-in study and plot it into DIR/plots: the paper's Table 1 (cases 0-3, and
     the linear equivalent of case 1) on the rotor (default) or the hub model, or with
-    --study envelope the rotor's flight envelope with propulsive trim.
+    --study envelope the rotor's flight envelope with propulsive trim, with --study airframe
+    Table 1 on a modal airframe with a swashplate.
 
     Exit status 0 if every case is ok, 1 if some failed (the ok ones are still plotted).
     """
