@@ -85,7 +85,7 @@ RESIDUAL_SETTLED = 1e-6  # relative force balance accepted once the update has v
 ROUNDOFF_FLOOR = 16.0
 SPIN_UP_STEPS = 8  # spin-rate continuation when Newton fails straight at the full rate
 MAX_TURN = 0.3  # largest director change of one Newton step (≈ rad)
-EQUILIBRATION_SWEEPS = 30
+EQUILIBRATION_SWEEPS = 30  # most sweeps of Ruiz's scaling (:func:`_scaling`)
 STEADY_TOL = 1e-8  # relative error allowed in the steadiness checks of a relative equilibrium
 
 
@@ -431,8 +431,8 @@ def _scaling(mat) -> tuple[Array, Array]:
 @njit(cache=True)
 def _ruiz(indptr, indices, data, nrows, sweeps):
     """Ruiz's equilibration of |A| (CSC): each sweep divides every row and column by the
-    square root of its max-norm, until all lie within a factor 2 of 1 (the log-range halves
-    per sweep; a KKT matrix of stiffnesses from 1e-4 to 1e12 takes about 8)."""
+    square root of its max-norm, until all lie within a factor 2 of 1 (the spread of the
+    logarithms about halves per sweep)."""
     ncols = len(indptr) - 1
     dr = np.ones(nrows)
     dc = np.ones(ncols)
@@ -544,7 +544,8 @@ def _director_mask(s: System) -> NDArray[np.bool_]:
 def _roundoff(mat: sp.csc_matrix, q: Array, lam: Array) -> Array:
     """Roundoff level of each force-balance row: ROUNDOFF_FLOOR·ε·(|J| |(q, λ)|), the size of
     the sums that make up the internal forces (a stiff beam's EA times its strain's
-    cancellation error), J the tangent's force rows."""
+    cancellation error), J the force rows of the tangent (of the last iterate: near the
+    solution it changes little)."""
     n = len(q)
     z = np.abs(np.concatenate([q, lam]))
     return ROUNDOFF_FLOOR * np.finfo(float).eps * (abs(mat[:n]) @ z)
