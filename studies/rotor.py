@@ -269,7 +269,7 @@ PARAMETERS: dict[str, Param] = {
                       choices=("beam", "modal")),
     "fuselage_modes": Param("", "1", "modal airframe file (TOML, format in studies/airframe.py) "
                             "used with fuselage = modal; empty: the shipped UH-60A-class file "
-                            "studies/data/uh60a_airframe.toml"),
+                            "studies/data/uh60a/airframe.toml"),
     "fuselage_modes_sha256": Param("", "1", "derived, filled in by validation (a given value "
                                    "is replaced): SHA-256 of the fuselage_modes file's content "
                                    "with fuselage = modal (empty with beam), so that a case's "
