@@ -425,6 +425,32 @@ class RelativeRotationSet(ElementSet):
         return _rk.damper_jacobians(g, hess, vi, damp, stiff, moment)
 
 
+def _separations(system, pairs) -> tuple[NDArray[np.int64], Array, Array]:
+    """The separations Δ_j = p_b − p_a of point pairs, linear in the unknowns: for each pair
+    (body_a or None for the ground, point_a, body_b, point_b), points global at t = 0, the
+    unknowns y_j = q[idx_j] it reads (J, 3 nt: nt terms of 3 each) and Δ_j = P_j y_j + b_j
+    (P: J × 3 × 3 nt, b: J × 3). Pairs with fewer terms are padded with zero coefficients on
+    their first term's columns."""
+    exprs = []
+    for body_a, point_a, body_b, point_b in pairs:
+        pa, pb = np.asarray(point_a, dtype=float), np.asarray(point_b, dtype=float)
+        xb = system.point(body_b, system.to_local_point(body_b, pb))
+        xa = (VecExpr([], pa.copy()) if body_a is None
+              else system.point(body_a, system.to_local_point(body_a, pa)))
+        exprs.append(xb - xa)
+    nt = max(len(d.terms) for d in exprs)
+    nj = len(exprs)
+    coef = np.zeros((nj, nt))
+    ycols = np.zeros((nj, nt), dtype=np.int64)
+    for j, d in enumerate(exprs):
+        for t, (c, o) in enumerate(d.terms):
+            coef[j, t], ycols[j, t] = c, o
+        ycols[j, len(d.terms):] = d.terms[0][1]  # padding: zero coefficient, same columns
+    idx = (ycols[:, :, None] + np.arange(3)).reshape(nj, 3 * nt)
+    p = np.einsum("jt,ik->jitk", coef, np.eye(3)).reshape(nj, 3, 3 * nt)
+    return idx, p, np.array([d.const for d in exprs])
+
+
 def _active(*coefs: Array) -> NDArray[np.int64]:
     """Directors α whose coefficient is non-zero in some member (columns of ``coefs``)."""
     return np.nonzero(np.any(np.abs(np.concatenate(coefs, axis=0)) > 0, axis=0))[0]
@@ -596,25 +622,9 @@ class FrameCouplingSet(ElementSet):
     def __init__(self, elements, system) -> None:
         super().__init__(elements, system)
         self.framed = elements[0].frame is not None
-        exprs = []
-        for e in elements:
-            p = np.asarray(e.point, dtype=float)
-            pb = system.point(e.body_b, system.to_local_point(e.body_b, p))
-            pa = (VecExpr([], p.copy()) if e.body_a is None
-                  else system.point(e.body_a, system.to_local_point(e.body_a, p)))
-            exprs.append(pb - pa)
-        nt = max(len(d.terms) for d in exprs)
-        nj = len(elements)
-        coef = np.zeros((nj, nt))
-        ycols = np.zeros((nj, nt), dtype=np.int64)
-        for j, d in enumerate(exprs):
-            for t, (c, o) in enumerate(d.terms):
-                coef[j, t], ycols[j, t] = c, o
-            ycols[j, len(d.terms):] = d.terms[0][1]  # padding: zero coefficient, same columns
-        self._yidx = (ycols[:, :, None] + np.arange(3)).reshape(nj, 3 * nt)
-        # P (J, 3, 3 nt): Δ = P y + b
-        self._P = np.einsum("jt,ik->jitk", coef, np.eye(3)).reshape(nj, 3, 3 * nt)
-        self._b = np.array([d.const for d in exprs])
+        # Δ = P y + b, P (J, 3, 3 nt)
+        self._yidx, self._P, self._b = _separations(
+            system, [(e.body_a, e.point, e.body_b, e.point) for e in elements])
         k = np.array([e.K for e in elements])
         c = np.array([e.C for e in elements])
         if self.framed:
@@ -630,7 +640,7 @@ class FrameCouplingSet(ElementSet):
         cc = self._comps
         self._K = k[:, cc][:, :, cc]
         self._C = c[:, cc][:, :, cc]
-        self._ny = 3 * nt
+        self._ny = self._yidx.shape[1]
         q0 = system.q0_raw
         w0 = self._w(q0)[0]
         self._w0 = np.array([w0[j] if e.rest is None else np.asarray(e.rest, float)[cc]
@@ -784,23 +794,8 @@ class AxialSpringSet(ElementSet):
 
     def __init__(self, elements, system) -> None:
         super().__init__(elements, system)
-        exprs = []
-        for e in elements:
-            pb = system.point(e.body_b, system.to_local_point(e.body_b, e.point_b))
-            pa = (VecExpr([], e.point_a.copy()) if e.body_a is None
-                  else system.point(e.body_a, system.to_local_point(e.body_a, e.point_a)))
-            exprs.append(pb - pa)
-        nt = max(len(d.terms) for d in exprs)
-        nj = len(elements)
-        coef = np.zeros((nj, nt))
-        ycols = np.zeros((nj, nt), dtype=np.int64)
-        for j, d in enumerate(exprs):
-            for t, (c, o) in enumerate(d.terms):
-                coef[j, t], ycols[j, t] = c, o
-            ycols[j, len(d.terms):] = d.terms[0][1]  # padding: zero coefficient
-        self.idx = (ycols[:, :, None] + np.arange(3)).reshape(nj, 3 * nt)
-        self._P = np.einsum("jt,ik->jitk", coef, np.eye(3)).reshape(nj, 3, 3 * nt)
-        self._b = np.array([d.const for d in exprs])
+        self.idx, self._P, self._b = _separations(
+            system, [(e.body_a, e.point_a, e.body_b, e.point_b) for e in elements])
         self.k = np.array([e.stiffness for e in elements], dtype=float)
         self.c = np.array([e.damping for e in elements], dtype=float)
         self.l0 = np.array([e.length0 for e in elements])
