@@ -67,3 +67,23 @@ def test_no_airframe_figures_without_an_ok_modal_case(tmp_path):
     failed = synthetic_archive(failed=2)
     failed["status"].values[3:] = STATUS_FAILED
     assert not has_airframe(failed)
+
+
+def test_run_study_airframe_is_the_rotors():
+    """--study airframe runs airframe_study.toml on the rotor; the hub has none, and says why."""
+    from click.testing import CliRunner
+
+    from pipelines import cli
+    from pipelines.studyfile import load_study
+    from tests.pipelines.helpers import one_error_line
+
+    study = cli.default_study(None, "airframe")
+    assert study.name == "airframe_study.toml"
+    cases = load_study(study).cases
+    modal = [c for c in cases if c.params["fuselage"] == "modal"]
+    assert len(cases) == 8 and len(modal) == 5
+    assert all(c.params["control_system"] == "swashplate" for c in modal)
+    assert {c.params["hole"] for c in modal} == {"circle", "cycloid", "epicycloid"}
+    line = one_error_line(CliRunner().invoke(cli.main, ["run", "--study", "airframe", "--model",
+                                                        "hub", "--out", "unused"]))
+    assert "--study airframe" in line and "rotor" in line and "airframe" in line
