@@ -423,7 +423,8 @@ OUTPUTS: dict[str, Output] = {
     "floquet_multiplier_max": Output(
         "1", "largest modulus of the periodic response's Floquet multipliers over one "
         "revolution (above 1: unstable), by Arnoldi on the quarter-revolution map "
-        "(solver.period_map)", dims=(), optional=True),
+        "(solver.period_map; on a modal airframe, the revolution's map)", dims=(),
+        optional=True),
     "run_floquet_revolutions": Output(
         "1", "revolutions simulated by the Floquet multipliers' perturbed quarter revolutions "
         "(not in run_simulated_revolutions)", dims=(), optional=True),
