@@ -6,9 +6,9 @@ on a modal airframe:
 
 ``airframe_hub_loads_4p``
     The 4P amplitudes of the in-plane hub force (x, y), the vertical hub force and the in-plane
-    hub moments (x, y), fixed frame: one bar per ok case, coloured by the model (the paper's:
-    fuselage-beam and prescribed pitch; the airframe: modal airframe, and the swashplate where
-    the case has it).
+    hub moments (x, y), fixed frame: one bar per ok case, coloured by the model: the paper's
+    (fuselage-beam, prescribed pitch), the swashplate on the fuselage-beam, the modal airframe
+    with the pitch prescribed, or both (:data:`MODELS`).
 ``airframe_cabin_vibration_4p``
     The 4P vibration at each response station of the modal cases, in g: the magnitude of the 4P
     harmonic of the station's acceleration vector, √(Σ over x, y, z of the 4P amplitude²), one
@@ -32,8 +32,13 @@ from pipelines.archive import STATUS_OK
 from pipelines.envelope_plots import HARMONIC, LOADS, SWING_LEVEL, _pin_swing
 
 G0 = 9.80665  # m s-2: the unit g of the cabin vibration
-# The two models' bar colours: the paper's (fuselage-beam, prescribed pitch) and the airframe.
-COLOURS = {"paper": "tab:blue", "airframe": "tab:orange"}
+# The models a case may stand for, by (fuselage, control_system): legend text and bar colour.
+MODELS = {
+    ("beam", "prescribed"): ("paper's model (fuselage-beam, prescribed pitch)", "tab:blue"),
+    ("beam", "swashplate"): ("fuselage-beam, swashplate", "tab:green"),
+    ("modal", "prescribed"): ("modal airframe, prescribed pitch", "tab:purple"),
+    ("modal", "swashplate"): ("modal airframe, swashplate", "tab:orange"),
+}
 
 
 def has_airframe(ds: xr.Dataset) -> bool:
@@ -45,8 +50,8 @@ def has_airframe(ds: xr.Dataset) -> bool:
     return bool(np.any(np.broadcast_to(modal, ok.shape) & ok))
 
 
-def _cases(ds: xr.Dataset) -> list[tuple[str, dict[str, int], str]]:
-    """The ok cases as (label, isel indexers, model: ``paper`` or ``airframe``)."""
+def _cases(ds: xr.Dataset) -> list[tuple[str, dict[str, int], tuple[str, str]]]:
+    """The ok cases as (label, isel indexers, model: its key in :data:`MODELS`)."""
     dims = tuple(ds["status"].dims)
     out = []
     for index in np.ndindex(*ds["status"].shape):
@@ -57,9 +62,10 @@ def _cases(ds: xr.Dataset) -> list[tuple[str, dict[str, int], str]]:
             label = str(ds["case_name"].values[index[0]])
         else:
             label = ", ".join(f"{d}={ds[d].values[i]}" for d, i in sel.items())
-        fuselage = ds["fuselage"].isel({d: i for d, i in sel.items()
-                                         if d in ds["fuselage"].dims}).values.item()
-        out.append((label, sel, "airframe" if fuselage == "modal" else "paper"))
+        fuselage = str(_case_value(ds, "fuselage", sel).values.item())
+        control = (str(_case_value(ds, "control_system", sel).values.item())
+                   if "control_system" in ds else "prescribed")
+        out.append((label, sel, (fuselage, control)))
     return out
 
 
@@ -76,24 +82,22 @@ def _case_value(ds: xr.Dataset, name: str, sel: dict[str, int]) -> xr.DataArray:
     return var.isel({d: i for d, i in sel.items() if d in var.dims})
 
 
-def _bars(ax: Any, labels: Sequence[str], values: Sequence[float], models: Sequence[str]
-          ) -> None:
+def _bars(ax: Any, labels: Sequence[str], values: Sequence[float],
+          models: Sequence[tuple[str, str]]) -> None:
     x = np.arange(len(labels))
-    ax.bar(x, values, 0.7, color=[COLOURS[m] for m in models], edgecolor="black",
+    ax.bar(x, values, 0.7, color=[MODELS[m][1] for m in models], edgecolor="black",
            linewidth=0.5)
     ax.set_xticks(x, labels, rotation=30, ha="right", fontsize="small")
     ax.grid(True, axis="y", alpha=0.3)
     ax.set_ylim(bottom=0)
 
 
-def _model_legend(fig: Figure, models: Sequence[str]) -> None:
+def _model_legend(fig: Figure, models: Sequence[tuple[str, str]]) -> None:
     from matplotlib.patches import Patch
 
-    names = {"paper": "paper's model (fuselage-beam, prescribed pitch)",
-             "airframe": "modal airframe (swashplate where given)"}
-    shown = [m for m in COLOURS if m in models]
-    fig.legend([Patch(facecolor=COLOURS[m], edgecolor="black") for m in shown],
-               [names[m] for m in shown], loc="outside lower center", ncols=len(shown),
+    shown = [m for m in MODELS if m in models]
+    fig.legend([Patch(facecolor=MODELS[m][1], edgecolor="black") for m in shown],
+               [MODELS[m][0] for m in shown], loc="outside lower center", ncols=len(shown),
                fontsize="small")
 
 
@@ -131,7 +135,7 @@ def airframe_figures(ds: xr.Dataset, out_dir: Path, formats: Sequence[str]) -> l
 
     # ---- cabin vibration per station
     if "station_acceleration_amplitude" in ds and "station" in ds.coords:
-        modal = [(label, sel) for label, sel, model in cases if model == "airframe"]
+        modal = [(label, sel) for label, sel, model in cases if model[0] == "modal"]
         stations = [str(s) for s in ds["station"].values]
         fig = Figure(figsize=(max(9.0, 1.0 + 0.5 * len(modal) * len(stations)), 5.0),
                      layout="constrained")

@@ -70,7 +70,8 @@ def test_no_airframe_figures_without_an_ok_modal_case(tmp_path):
 
 
 def test_run_study_airframe_is_the_rotors():
-    """--study airframe runs airframe_study.toml on the rotor; the hub has none, and says why."""
+    """--study airframe runs airframe_study.toml on the rotor (Table 1's cases 0-2 on both
+    models, the hole shapes, each change alone); the hub has none, and says why."""
     from click.testing import CliRunner
 
     from pipelines import cli
@@ -80,10 +81,14 @@ def test_run_study_airframe_is_the_rotors():
     study = cli.default_study(None, "airframe")
     assert study.name == "airframe_study.toml"
     cases = load_study(study).cases
-    modal = [c for c in cases if c.params["fuselage"] == "modal"]
-    assert len(cases) == 8 and len(modal) == 5
-    assert all(c.params["control_system"] == "swashplate" for c in modal)
-    assert {c.params["hole"] for c in modal} == {"circle", "cycloid", "epicycloid"}
+    both = [c for c in cases if (c.params["fuselage"], c.params["control_system"])
+            == ("modal", "swashplate")]
+    assert len(cases) == 12 and len(both) == 5
+    assert {c.params["hole"] for c in both} == {"circle", "cycloid", "epicycloid"}
+    # each change alone, locked and free
+    for model in (("beam", "swashplate"), ("modal", "prescribed")):
+        alone = [c for c in cases if (c.params["fuselage"], c.params["control_system"]) == model]
+        assert sorted(c.params["bifilar"] for c in alone) == ["free", "locked"]
     line = one_error_line(CliRunner().invoke(cli.main, ["run", "--study", "airframe", "--model",
                                                         "hub", "--out", "unused"]))
     assert "--study airframe" in line and "rotor" in line and "airframe" in line
