@@ -332,7 +332,7 @@ def plot(archive: Path, out_dir: Path, formats: tuple[str, ...]) -> None:
                    "circle, cycloid and epicycloid holes (hub model only; "
                    "studies/jump_study.toml); airframe: Table 1's cases 0-2 on the paper's "
                    "model and on the UH-60A-class modal airframe with a swashplate, and hole "
-                   "shapes (rotor model only; studies/airframe_study.toml, 12 cases).")
+                   "shapes (rotor model only; studies/airframe_study.toml, 14 cases).")
 @workers_option
 @scheduler_option
 @cluster_option

@@ -83,8 +83,11 @@ def test_run_study_airframe_is_the_rotors():
     cases = load_study(study).cases
     both = [c for c in cases if (c.params["fuselage"], c.params["control_system"])
             == ("modal", "swashplate")]
-    assert len(cases) == 12 and len(both) == 5
-    assert {c.params["hole"] for c in both} == {"circle", "cycloid", "epicycloid"}
+    paper = [c for c in cases if (c.params["fuselage"], c.params["control_system"])
+             == ("beam", "prescribed")]
+    assert len(cases) == 14 and len(both) == 5 and len(paper) == 5
+    for model in (both, paper):
+        assert {c.params["hole"] for c in model} == {"circle", "cycloid", "epicycloid"}
     # each change alone, locked and free
     for model in (("beam", "swashplate"), ("modal", "prescribed")):
         alone = [c for c in cases if (c.params["fuselage"], c.params["control_system"]) == model]
