@@ -115,8 +115,9 @@ def airframe_figures(ds: xr.Dataset, out_dir: Path, formats: Sequence[str]) -> l
     # ---- 4P hub loads
     loads = {k: v for k, v in LOADS.items() if v[0] in ds}
     if loads:
-        fig = Figure(figsize=(max(10.0, 1.2 * len(cases) * 2), 3.2 * -(-len(loads) // 2) + 1.5),
-                     layout="constrained")
+        # two panels abreast, half an inch a bar
+        fig = Figure(figsize=(max(10.0, 2 * (1.5 + 0.5 * len(cases))),
+                              3.4 * -(-len(loads) // 2) + 1.5), layout="constrained")
         axes = fig.subplots(-(-len(loads) // 2), 2, squeeze=False).ravel()
         for ax in axes[len(loads):]:
             ax.set_visible(False)
@@ -161,7 +162,7 @@ def airframe_figures(ds: xr.Dataset, out_dir: Path, formats: Sequence[str]) -> l
     swing = [(label, _pin_swing(ds, sel), model) for label, sel, model in cases]
     swing = [s for s in swing if np.isfinite(s[1]) and s[1] > SWING_LEVEL]
     if swing:
-        fig = Figure(figsize=(max(8.0, 1.2 * len(swing)), 5.0), layout="constrained")
+        fig = Figure(figsize=(max(8.0, 1.5 + 0.6 * len(swing)), 5.0), layout="constrained")
         ax = fig.subplots()
         _bars(ax, [s[0] for s in swing], [s[1] for s in swing], [s[2] for s in swing])
         ax.set_ylabel("pin swing, half peak-to-peak (degree)")
