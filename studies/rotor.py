@@ -12,9 +12,10 @@ The model, built from solver parts:
   states none; without it the fuselage transient never decays).
 * or, with ``fuselage = "modal"``, a modal airframe (:mod:`studies.airframe`, the file
   ``fuselage_modes``): a massless shaft head (the file carries its mass) attached at the hub
-  centre through the modal coordinates, no ground clamp, no fuselage damper (the modal
-  damping replaces it); the hub loads are the attachment's, and each station's acceleration
-  Φ_s η̈ is recorded (``station_acceleration``, ``pilot_seat_vibration_4p``).
+  centre through the modal coordinates, on the arc about the file's centre of gravity (the
+  thrust's geometric stiffness), no ground clamp, no fuselage damper (the modal damping
+  replaces it); the hub loads are the attachment's, and each station's acceleration Φ_s η̈ is
+  recorded (``station_acceleration``, ``pilot_seat_vibration_4p``).
 * hub — a rigid body spinning at Ω on the shaft head (driven revolute about the shaft axis:
   ψ = Ωt, counter-clockwise seen from above, as the UH-60A; ψ = 0 aft, along +x).
 * four UH-60A blades (:mod:`studies.uh60a`: Yeo's section properties with the Davis cuff,
@@ -58,9 +59,11 @@ After settling the run shoots (``shooting_window`` > 0): the model is symmetric 
 revolution with the blades and bifilars permuted (:func:`symmetry`), and
 :func:`studies.periodic.shoot` extrapolates the quarter-revolution iterates to their fixed
 point and restarts the model from it (beam nodes' and bodies' triads combined on the rotation
-group). With ``shooting_window = 0`` it marches instead, and each lag damper then also carries
-delayed feedback over one revolution (:func:`lag_feedback_gains`, damping ratio
-``lag_feedback``), which vanishes on any periodic response and is removed before recording.
+group); on a modal airframe, which has no such symmetry, the one-revolution iterates
+(:func:`shooting_symmetry`). With ``shooting_window = 0`` it marches instead, and each lag
+damper then also carries delayed feedback over one revolution (:func:`lag_feedback_gains`,
+damping ratio ``lag_feedback``), which vanishes on any periodic response and is removed
+before recording.
 
 Besides the loads, each case archives the controls flown, the shaft power (the drive's
 moment about the shaft axis, mean × Ω), blade 0's flap angle and its first harmonics, and the
