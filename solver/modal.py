@@ -18,10 +18,11 @@ damper's (negative: energy lost).
 
 :class:`ModalAttachment` is a joint with Lagrange multipliers: a body's material point follows
 the structure's displacement and the body's small rotation follows the structure's. Its rows
-are linear in the unknowns, so they go into the model's shared quadratic constraint tensor
-(:mod:`solver.quadratic`, compiled and vectorized with the lower-pair joints): their Jacobian is
-constant, exact as a discrete derivative, and their multipliers do no work. The multipliers'
-forces on the η columns are the generalized forces Q of the attachment.
+are linear in the unknowns (quadratic in η when the point turns on the arc about a rotation
+centre), so they go into the model's shared quadratic constraint tensor (:mod:`solver.quadratic`,
+compiled and vectorized with the lower-pair joints): the midpoint rule is exact on them as a
+discrete derivative, and their multipliers do no work. The multipliers' forces on the η columns
+are the generalized forces Q of the attachment.
 
 Conventions
 -----------
@@ -53,6 +54,7 @@ from solver.bodies import PointMass, PrescribedBody, RigidBody
 from solver.element import EMPTY_F, Element, ElementSet
 from solver.integrators import initial_accelerations
 from solver.quadratic import QuadraticBuilder, QuadraticSet, VecExpr
+from solver.rotations import skew
 from solver.state import SECOND, StateBlock
 
 if TYPE_CHECKING:
@@ -351,12 +353,14 @@ class ModalAttachment(Element):
     rotation vector exact to first order (error φ³/6) and built from the directors the body's
     orthonormality rows keep orthonormal (it is the axial vector of the rotation's skew part,
     independent of the three orthonormality rows, which fix its symmetric part). Both row
-    sets are linear in the unknowns: their Jacobian is constant, so they are exact as
-    discrete derivatives and their forces do no work in any scheme.
+    sets are linear in the unknowns (without a ``rotation_centre``, below): their Jacobian is
+    constant, so they are exact as discrete derivatives and their forces do no work in any
+    scheme.
 
     The constraint forces are −Gᵀλ: the body takes the force −λ_t at the point and (to first
     order) the moment −λ_r, and the same rows give the modes the generalized forces
-    Q = Φ_tᵀ λ_t + Φ_rᵀ λ_r, the virtual work of the opposite force and moment, which the body
+    Q = Φ_tᵀ λ_t + Φ_rᵀ λ_r (with a centre, plus the arc term's derivative), the virtual work
+    of the opposite force and moment, which the body
     applies to the structure (action and reaction: the constraint forces on body and modes
     together do no work). :meth:`solver.system.System.reaction` reports the force and moment
     on the body, :meth:`modal_force` the generalized force on the modes.
@@ -462,7 +466,7 @@ class ModalAttachment(Element):
             r0 = np.array([lay.to_local_vector(self.body, e) for e in np.eye(3)])
             for k in range(3):
                 dk = lay.vector(self.body, np.eye(3)[k])  # director d_k
-                _add_matrix_vector(qb, rows, 0.5 * _skew(r0[:, k]), dk)
+                _add_matrix_vector(qb, rows, 0.5 * skew(r0[:, k]), dk)
             for i, c in enumerate(self.phi_r @ eta0):
                 if c != 0.0:
                     qb.add_constant(int(rows[i]), float(c))
@@ -482,11 +486,6 @@ class ModalAttachment(Element):
         f = -np.bincount(quad.jac_cols[entries], gv * lam[quad.jac_rows[entries]],
                          minlength=system.n)
         return f[self.modal.indices(system)]
-
-
-def _skew(a: Array) -> Array:
-    """[a×]: the matrix of the cross product a × ·."""
-    return np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
 
 
 def _add_matrix_vector(qb: QuadraticBuilder, rows: NDArray[np.int64], a: Array,

@@ -129,6 +129,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from solver.modal import ModalAttachment, ModalStructure
+from solver.rotations import skew
 from studies.parameters import ParameterError, read_toml
 
 if TYPE_CHECKING:
@@ -362,8 +363,9 @@ class Airframe:
         hub point), both global: η_i = (Φ_t,iᵀ F + Φ_r,iᵀ M) / (m_i ω_i²), the start of a run
         on the mean deflection. Linear: the attached model's own equilibrium differs at second
         order in the load (on the shipped file under the UH-60A's mean thrust and shaft
-        torque by 3e-3 of the largest η: the torque, tilted with the deflected hub, loads
-        roll and torsion). Raises :class:`AirframeError` if a loaded mode has no stiffness
+        torque by 7e-3 of the largest η: the torque, tilted with the deflected hub, loads
+        roll and torsion, and the thrust stiffens roll and pitch on the arc about the centre
+        of gravity). Raises :class:`AirframeError` if a loaded mode has no stiffness
         (0 Hz: no static deflection exists)."""
         load = np.concatenate([np.asarray(force, dtype=float).reshape(3),
                                np.asarray(moment, dtype=float).reshape(3)])
@@ -657,9 +659,7 @@ def _rotation_rows(o: int, n: int) -> Array:
     :class:`solver.modal.ModalAttachment` uses)."""
     t = np.zeros((3, n))
     for k in range(3):
-        e = np.eye(3)[k]
-        skew = np.array([[0.0, -e[2], e[1]], [e[2], 0.0, -e[0]], [-e[1], e[0], 0.0]])
-        t[:, o + 3 + 3 * k : o + 6 + 3 * k] = 0.5 * skew
+        t[:, o + 3 + 3 * k : o + 6 + 3 * k] = 0.5 * skew(np.eye(3)[k])
     return t
 
 

@@ -57,7 +57,7 @@ from solver.joints import Prismatic
 from solver.model import Model
 from solver.rotations import rotation_about
 from solver.timefunctions import TimeFunction
-from studies.parameters import Param, ParameterError
+from studies.parameters import Param
 
 Z = np.array([0.0, 0.0, 1.0])
 # The pitch link's length (m): the rigid linkage's geometry (the stiffness the blade sees is
@@ -210,14 +210,9 @@ def add_pitch_link(model: Model, hub, root, k: int, azimuth: float, hinge_radius
 
 
 def check(control_system: str, stiffness: float, horn: float) -> None:
-    """Raise :class:`~studies.parameters.ParameterError` for a control system not among
-    :data:`CONTROL_SYSTEMS` or a link or horn outside its parameter's range (the ranges the
-    rotor's and the fan plot's parameters declare; this check serves direct calls)."""
-    if control_system not in CONTROL_SYSTEMS:
-        raise ParameterError(f"control_system = {control_system!r}: must be one of "
-                             + ", ".join(repr(c) for c in CONTROL_SYSTEMS))
-    for name, value in (("pitch_link_stiffness", stiffness), ("pitch_horn_length", horn)):
-        spec = PARAMETERS[name]
-        if not (math.isfinite(value) and spec.minimum < value <= spec.maximum):
-            raise ParameterError(f"{name} = {value!r} {spec.units}: outside the valid range "
-                                 f"({spec.minimum:g}, {spec.maximum:g}] {spec.units}")
+    """Raise :class:`~studies.parameters.ParameterError` for a control system, link or horn
+    its parameter (:data:`PARAMETERS`) rejects: the check the rotor's and the fan plot's
+    validation make, for direct calls."""
+    for name, value in (("control_system", control_system),
+                        ("pitch_link_stiffness", stiffness), ("pitch_horn_length", horn)):
+        PARAMETERS[name].check(name, value)
