@@ -181,9 +181,10 @@ class Output:
         A scalar result named ``run_*`` is a fact about the run (its time base, cost,
         convergence): archived like any other, not drawn.
     optional
-        A scalar result or history only some runs have (e.g. a step-error estimate, not made
-        when it is not asked for; the stations of a modal airframe): the run leaves it out
-        rather than filling NaN, and the archive holds NaN for the cases without it.
+        A scalar result, history or coordinate only some runs have (e.g. a step-error
+        estimate, not made when it is not asked for; the stations of a modal airframe): the
+        run leaves it out rather than filling NaN, and the archive holds NaN for the cases
+        without it.
     """
 
     units: str
@@ -227,9 +228,9 @@ def run_facts(sim: Any, time_step: float) -> dict[str, np.generic]:
 def check_outputs(outputs: Mapping[str, Output]) -> None:
     """Raise :class:`OutputError` if a set of declarations is inconsistent."""
     for name, out in outputs.items():
-        if out.optional and not (out.is_scalar or out.history):
-            raise OutputError(f"output {name!r}: only a scalar result or a history can be "
-                              "optional")
+        if out.optional and not (out.is_scalar or out.history or out.dims == (name,)):
+            raise OutputError(f"output {name!r}: only a scalar result, a history or a "
+                              "coordinate can be optional")
         if out.components is None:
             if out.harmonics and "time" not in out.dims:
                 raise OutputError(f"output {name!r}: harmonics need a 'time' dimension")

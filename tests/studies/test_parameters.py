@@ -112,7 +112,7 @@ def test_optional_outputs_may_be_left_out():
     # a history too (a modal airframe's stations), but not a plain indexed output
     history = {"x": Output("m", "x", history=True, optional=True)}
     assert "x" not in output_dataset(history, {})
-    with pytest.raises(OutputError, match="only a scalar result or a history can be optional"):
+    with pytest.raises(OutputError, match="only a scalar result, a history or a coordinate"):
         ModelSpec("bad", {}, _simulate, outputs={"x": Output("m", "x", optional=True)})
 
 
