@@ -51,21 +51,18 @@ def has_airframe(ds: xr.Dataset) -> bool:
 
 
 def _cases(ds: xr.Dataset) -> list[tuple[str, dict[str, int], tuple[str, str]]]:
-    """The ok cases as (label, isel indexers, model: its key in :data:`MODELS`)."""
-    dims = tuple(ds["status"].dims)
+    """The ok cases as (label, isel indexers, model: its key in :data:`MODELS`), labelled as
+    every figure labels them (:func:`pipelines.plots._cases`)."""
+    from pipelines.plots import _cases as archive_cases
+
     out = []
-    for index in np.ndindex(*ds["status"].shape):
-        if int(ds["status"].values[index]) != STATUS_OK:
+    for case in archive_cases(ds):
+        if not case.ok:
             continue
-        sel = dict(zip(dims, index, strict=True))
-        if dims == ("case",) and "case_name" in ds:
-            label = str(ds["case_name"].values[index[0]])
-        else:
-            label = ", ".join(f"{d}={ds[d].values[i]}" for d, i in sel.items())
-        fuselage = str(_case_value(ds, "fuselage", sel).values.item())
-        control = (str(_case_value(ds, "control_system", sel).values.item())
+        fuselage = str(_case_value(ds, "fuselage", case.sel).values.item())
+        control = (str(_case_value(ds, "control_system", case.sel).values.item())
                    if "control_system" in ds else "prescribed")
-        out.append((label, sel, (fuselage, control)))
+        out.append((case.label, case.sel, (fuselage, control)))
     return out
 
 
