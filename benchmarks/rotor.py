@@ -8,6 +8,7 @@
     PYTHONPATH=. python benchmarks/rotor.py --case --no-floquet         # without its multipliers
     PYTHONPATH=. python benchmarks/rotor.py --case --no-estimate        # without its step error
     PYTHONPATH=. python benchmarks/rotor.py --case --trim wind_tunnel   # trimmed, and untrimmed
+    PYTHONPATH=. python benchmarks/rotor.py --case --progress           # its stages, timed
     PYTHONPATH=. python benchmarks/rotor.py --wake-update               # one wake update
 
 The first form builds the model with its defaults (``--steps-per-rev`` to change them), marches
@@ -17,7 +18,9 @@ pyinstrument and prints the profile (the modules that take the time). The second
 as the sweep does (settling, marching until periodic, recording) and prints its wall time,
 revolutions (those of the step-error estimate's coarser step among them) and Newton iterations
 per step, its step-error estimate (``--no-estimate``: none, and no extrapolation), its largest
-Floquet multiplier (``--no-floquet``: none) and, with the prescribed wake, its updates; with
+Floquet multipliers (``--no-floquet``: none) and, with the prescribed wake, its updates
+(``--progress``: the case's progress lines on stderr, each after the seconds since the case
+began: where its revolutions and time go); with
 ``--trim`` it runs the case trimmed and untrimmed and prints both, the trim's control updates,
 its residuals and the revolutions' ratio (``--coarse``: the coarse case of the tests, 120
 steps/rev, 3 elements, 3 settling revolutions, periodic to 5 %, Peters–He alone unless
@@ -33,12 +36,14 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 import time
 
 import numpy as np
 
 from solver.system import System
 from studies.parameters import Parameters
+from studies.progress import reporting
 from studies.rotor import SPEC, build, integrator, run
 
 
@@ -70,9 +75,17 @@ def per_revolution(p: Parameters, revolutions: int, profile: bool) -> dict:
             "newton_per_step": round(integ.n_iterations / integ.n_steps, 2)}
 
 
-def per_case(p: Parameters) -> dict:
+def per_case(p: Parameters, progress: bool = False) -> dict:
     t0 = time.perf_counter()
-    ds = run(p)
+
+    def say(line: str) -> None:
+        print(f"{time.perf_counter() - t0:7.1f} s  {line}", file=sys.stderr, flush=True)
+
+    if progress:
+        with reporting(say):
+            ds = run(p)
+    else:
+        ds = run(p)
     wall = time.perf_counter() - t0
     revs = ds["run_simulated_revolutions"].item()
     return {"bifilar": p.bifilar, "inflow": p.inflow, "trim": p.trim, "wall_s": round(wall, 1),
@@ -120,6 +133,8 @@ def main() -> None:
     a.add_argument("--aero-points", type=int, default=None,
                    help="aerodynamic sections per blade element (default: the model's, 3)")
     a.add_argument("--case", action="store_true", help="run one whole case")
+    a.add_argument("--progress", action="store_true",
+                   help="with --case: print its progress lines, timed, on stderr")
     a.add_argument("--trim", default=None, choices=["wind_tunnel", "propulsive"],
                    help="with --case: run it trimmed and untrimmed")
     a.add_argument("--coarse", action="store_true",
@@ -158,12 +173,12 @@ def main() -> None:
     if args.wake_update:
         res = wake_update(SPEC.validate({**given, "inflow": "prescribed_wake"}))
     elif args.case and args.trim:
-        plain = per_case(p)
+        plain = per_case(p, args.progress)
         print(json.dumps(plain))
-        res = per_case(SPEC.validate({**given, "trim": args.trim}))
+        res = per_case(SPEC.validate({**given, "trim": args.trim}), args.progress)
         res["revolutions_ratio"] = round(res["revolutions"] / plain["revolutions"], 2)
     elif args.case:
-        res = per_case(p)
+        res = per_case(p, args.progress)
     else:
         res = per_revolution(p, args.revolutions, args.profile)
     print(json.dumps(res))
