@@ -18,7 +18,7 @@ pyinstrument and prints the profile (the modules that take the time). The second
 as the sweep does (settling, marching until periodic, recording) and prints its wall time,
 revolutions (those of the step-error estimate's coarser step among them) and Newton iterations
 per step, its step-error estimate (``--no-estimate``: none, and no extrapolation), its largest
-Floquet multipliers (``--no-floquet``: none) and, with the prescribed wake, its updates
+Floquet multiplier (``--no-floquet``: none) and, with the prescribed wake, its updates
 (``--progress``: the case's progress lines on stderr, each after the seconds since the case
 began: where its revolutions and time go); with
 ``--trim`` it runs the case trimmed and untrimmed and prints both, the trim's control updates,
@@ -35,6 +35,7 @@ UH-60A-class one) instead of the fuselage-beam.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import sys
 import time
@@ -81,10 +82,7 @@ def per_case(p: Parameters, progress: bool = False) -> dict:
     def say(line: str) -> None:
         print(f"{time.perf_counter() - t0:7.1f} s  {line}", file=sys.stderr, flush=True)
 
-    if progress:
-        with reporting(say):
-            ds = run(p)
-    else:
+    with reporting(say) if progress else contextlib.nullcontext():
         ds = run(p)
     wall = time.perf_counter() - t0
     revs = ds["run_simulated_revolutions"].item()
