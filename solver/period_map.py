@@ -52,12 +52,14 @@ N-th power are the period's multipliers, at an N-th of the cost per Krylov vecto
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
+from scipy.linalg import schur
 
 from solver.curve_joints import Rolling
 from solver.integrators import constraint_rows, project_positions, project_velocities
@@ -81,8 +83,8 @@ NOISE = 0.1
 
 
 def arnoldi(action, v0: Array, steps: int, *, min_steps: int | None = None,
-            tol: float = 0.0, ritz_vectors: bool = False
-            ) -> tuple[CArray, Array] | tuple[CArray, Array, CArray]:
+            tol: float = 0.0, ritz_vectors: bool = False, krylov: bool = False
+            ) -> tuple:
     """Ritz values of a linear map by Arnoldi iteration from ``v0``, with the residual
     estimate of each (|h_{k+1,k}| |e_kᵀ y| for its unit eigenvector y of the Hessenberg
     matrix: ‖A V y − μ V y‖ for the Ritz pair). Largest modulus first.
@@ -90,7 +92,9 @@ def arnoldi(action, v0: Array, steps: int, *, min_steps: int | None = None,
     At most ``steps`` steps; from ``min_steps`` on (default ``steps``) it stops once the
     largest Ritz value's residual, relative to its modulus, is within ``tol``, and on an
     invariant subspace. Modified Gram–Schmidt with one reorthogonalization. With
-    ``ritz_vectors`` the Ritz vectors V y are returned too (columns, same order).
+    ``ritz_vectors`` the Ritz vectors V y are returned too (columns, same order); with
+    ``krylov`` also the orthonormal Krylov basis V (columns, the k vectors the map was applied
+    to) and the Hessenberg matrix H = Vᵀ A V (k × k).
     """
     n = v0.size
     basis = np.zeros((n, steps + 1))
@@ -123,6 +127,8 @@ def arnoldi(action, v0: Array, steps: int, *, min_steps: int | None = None,
                 k = j + 1
                 break
     vals, res, vecs = ritz(k)
+    if krylov:
+        return vals, res, basis[:, :k] @ vecs, basis[:, :k], hess[:k, :k]
     if ritz_vectors:
         return vals, res, basis[:, :k] @ vecs
     return vals, res
@@ -174,6 +180,90 @@ def position_tangent(system, q: Array, t: float):
     return project
 
 
+def kinetic_metric(system) -> Array:
+    """The diagonal metric the map's velocities are made consistent in (see
+    :func:`map_multipliers`): the mass matrix's diagonal, a tiny weight on a massless
+    coordinate, 1 on a first-order state."""
+    mass = np.asarray(system.M.diagonal(), dtype=float)
+    metric = np.where(mass > 0, mass, 1e-8 * max(float(mass.max()), 1e-300))
+    metric[system.first_order] = 1.0
+    return metric
+
+
+def perturbed(system, arrays: list[Array], delta: list[Array], t: float, metric: Array,
+              v_consistent: Array | None = None) -> list[Array]:
+    """The state ``arrays`` (positions, velocities, a scheme's history) moved by ``delta`` as
+    the map's Jacobian sees a perturbation: positions projected onto the constraints at time
+    ``t``, and the velocities' change made consistent with them in the ``metric`` — the
+    difference of two projections, so that the velocities keep the component across the
+    constraints the scheme's own steps left (``v_consistent``: the projection of the
+    unperturbed velocities, if known). The rest is added as it is."""
+    out = [a + d for a, d in zip(arrays, delta, strict=True)]
+    out[0] = project_positions(system, out[0], t)
+    if v_consistent is None:
+        v_consistent = project_velocities(system, arrays[0], arrays[1], t, metric)
+    out[1] = arrays[1] + (project_velocities(system, out[0], out[1], t, metric)
+                          - v_consistent)
+    return out
+
+
+@dataclass
+class SlowSubspace:
+    """What an Arnoldi run on the map knows of its slow modes, for Newton–Picard shooting.
+
+    ``basis`` holds the Krylov vectors V (columns, in the scaled state of
+    :func:`map_multipliers`: the arrays ``keys`` concatenated and divided by ``weight``),
+    ``hessenberg`` the map's Jacobian on them, H = Vᵀ M V, and ``observed`` what the caller's
+    probe saw of each: C V, C the linear map from a state to the observations of the march
+    that starts from it (rows: the observations flattened; columns: the vectors).
+
+    Newton–Picard (Lust, Roose, Spence & Champneys 1998; Shroff & Keller 1993, the recursive
+    projection method): on the slow subspace V_p of the Ritz values above a modulus ρ (a
+    Schur basis of H), the map's error e_j of iterate j obeys e_{j+1} = H_p e_j; the fast
+    rest decays by marching. Two successive iterates' observations differ by
+    C V_p (H_p − I) e_{j−1}, which gives the slow error by least squares, and the error two
+    iterates on is H_p² e_{j−1}: the correction removes it. The error is measured on
+    observations rather than on the state because the state's own change over a map carries
+    a floor the motion does not (the rates of fast first-order states, a scheme's history),
+    whose projection on V_p, amplified by (I − H_p)⁻¹, would drive the iterates away.
+    """
+
+    keys: list[str]
+    weight: Array
+    basis: Array
+    hessenberg: Array
+    observed: Array
+
+    def correction(self, change: Array, scale: Array, rho: float = 0.5,
+                   rcond: float = 1e-6) -> tuple[list[Array], float]:
+        """The state correction that removes the slow error from the iterate that follows
+        the two whose observations differ by ``change`` (the probe's layout, any leading
+        shape whose last axis matches ``scale``, each observed column's scale), and the
+        part of ``change`` the slow subspace leaves unexplained (relative). The slow modes
+        are the Ritz values of modulus above ``rho``; the least squares drop the directions
+        whose singular values fall below ``rcond`` of the largest (poorly observed modes).
+
+        Returns the correction as arrays in the order of :attr:`keys` (to be added to the
+        iterate, in the phase the map's iterates share) and that residual."""
+        t, u, p = schur(self.hessenberg, output="real",
+                        sort=lambda re, im: re * re + im * im > rho * rho)
+        if p == 0:
+            return [np.zeros_like(self.weight[: self.weight.size // len(self.keys)])
+                    for _ in self.keys], 1.0
+        h = t[:p, :p]
+        units = np.broadcast_to(np.asarray(scale, dtype=float), np.shape(change)).ravel()
+        live = units > 0
+        b = np.ravel(change)[live] / units[live]
+        a = (self.observed @ u[:, :p])[live] / units[live, None]
+        c, *_ = np.linalg.lstsq(a, b, rcond=rcond)
+        norm = np.linalg.norm(b)
+        unexplained = float(np.linalg.norm(b - a @ c) / norm) if norm > 0 else 0.0
+        e = h @ h @ np.linalg.solve(h - np.eye(p), c)
+        x = -(self.basis @ (u[:, :p] @ e)) * self.weight
+        n = x.size // len(self.keys)
+        return [x[i * n : (i + 1) * n] for i in range(len(self.keys))], unexplained
+
+
 @dataclass
 class MapMultipliers:
     """The dominant Floquet multipliers of a periodic response (:func:`map_multipliers`).
@@ -186,7 +276,8 @@ class MapMultipliers:
     of the k-th multiplier's mode (its positions on the constraints' tangent);
     ``fresh_residual`` the largest pair's residual from one more application of the map,
     relative to its Ritz value (the noise of the finite differences shows here, not in
-    Arnoldi's estimate)."""
+    Arnoldi's estimate); ``subspace`` what the run knows of the slow modes, with a probe
+    (:class:`SlowSubspace`)."""
 
     values: CArray
     residuals: Array
@@ -194,6 +285,7 @@ class MapMultipliers:
     evaluations: int
     modes: CArray
     fresh_residual: float = 0.0
+    subspace: SlowSubspace | None = None
 
     @property
     def failure(self) -> str:
@@ -215,8 +307,9 @@ class MapMultipliers:
 
 def map_multipliers(integ, steps: int, *, symmetry=None, rate: float = 1.0,
                     vectors: int = 64, min_vectors: int = 24, eps: float = 1e-5,
-                    tol: float = 1e-10, accuracy: float = 1e-4, seed: int = 0
-                    ) -> MapMultipliers:
+                    tol: float = 1e-10, accuracy: float = 1e-4, seed: int = 0,
+                    probe: Callable[[], Array] | None = None,
+                    observe: Callable[[Array], Array] | None = None) -> MapMultipliers:
     """Dominant Floquet multipliers of the periodic response ``integ`` is on.
 
     Parameters
@@ -249,6 +342,11 @@ def map_multipliers(integ, steps: int, *, symmetry=None, rate: float = 1.0,
         modulus, is within this; :attr:`MapMultipliers.largest` is NaN if it is not.
     seed
         Of the random start vector.
+    probe, observe
+        With ``probe`` (a row of observations of the integrator's state, called after each
+        step of every march), the result's :attr:`MapMultipliers.subspace` holds what it saw
+        of each Krylov vector: ``observe`` (default: as they are) of the march's rows stacked,
+        its difference from the unperturbed march's over the perturbation.
     """
     keys = ["q", "v", *[k for k in integ.STATE if k not in ("t", "q", "v", "lam", "nu")]]
     if not (np.isfinite(rate) and rate > 0):
@@ -265,7 +363,8 @@ def map_multipliers(integ, steps: int, *, symmetry=None, rate: float = 1.0,
     with integ.tightened(tol):
         try:
             return _arnoldi_on_map(integ, steps, keys, np.repeat(w, integ.sys.n), symmetry,
-                                   vectors, min_vectors, eps, accuracy, seed)
+                                   vectors, min_vectors, eps, accuracy, seed, probe,
+                                   observe)
         finally:
             integ.restore(base)
             for obj, name, value in counters:
@@ -274,7 +373,8 @@ def map_multipliers(integ, steps: int, *, symmetry=None, rate: float = 1.0,
 
 def _arnoldi_on_map(integ, steps: int, keys: list[str], weight: Array, symmetry,
                     vectors: int, min_vectors: int, eps: float, accuracy: float,
-                    seed: int) -> MapMultipliers:
+                    seed: int, probe: Callable[[], Array] | None = None,
+                    observe: Callable[[Array], Array] | None = None) -> MapMultipliers:
     """:func:`map_multipliers` from ``integ``'s state, ``weight`` the size of a unit of each
     coordinate of the concatenated state arrays ``keys``."""
     system = integ.sys
@@ -288,12 +388,12 @@ def _arnoldi_on_map(integ, steps: int, keys: list[str], weight: Array, symmetry,
     # fictitious link, a joint's scalar) takes whatever rate the constraints imply, so the
     # map acts on the motion of the masses (a massless coordinate's own rate is a state of
     # the scheme only, undamped in an energy-preserving step)
-    mass = np.asarray(system.M.diagonal(), dtype=float)
-    metric = np.where(mass > 0, mass, 1e-8 * max(float(mass.max()), 1e-300))
-    metric[system.first_order] = 1.0
+    metric = kinetic_metric(system)
 
     def consistent(q: Array, v: Array) -> Array:
         return project_velocities(system, q, v, t0, metric)
+
+    seen: list[Array] = []  # what the probe saw of each march, observed
 
     def integrate(arrays: list[Array]) -> list[Array]:  # the map's raw output
         nonlocal count
@@ -301,11 +401,18 @@ def _arnoldi_on_map(integ, steps: int, keys: list[str], weight: Array, symmetry,
         state.update(zip(keys, arrays, strict=True))
         integ.restore(state)
         integ.forget_factors()  # every march on one Newton path
+        rows = []
         for _ in range(steps):
             info = integ.step()
             if not info.converged:
                 raise RuntimeError(f"Floquet multipliers: a perturbed step failed at t = "
                                    f"{integ.t:.6g} s: {info.message}")
+            if probe is not None:
+                rows.append(np.asarray(probe(), dtype=float))
+        if probe is not None:
+            block = np.array(rows)
+            seen.append(np.asarray(observe(block) if observe is not None else block,
+                                   dtype=float))
         count += 1
         out = [np.copy(getattr(integ, k)) for k in keys]
         return out if symmetry is None else list(symmetry.back(*out, k=1))
@@ -340,9 +447,8 @@ def _arnoldi_on_map(integ, steps: int, keys: list[str], weight: Array, symmetry,
 
     def action(u: Array) -> Array:
         d = restrict(u) * eps * weight
-        parts = [start[i] + d[i * n : (i + 1) * n] for i in range(len(keys))]
-        parts[0] = project_positions(system, parts[0], t0)
-        parts[1] = start[1] + (consistent(parts[0], parts[1]) - v_base)
+        parts = perturbed(system, start, [d[i * n : (i + 1) * n] for i in range(len(keys))],
+                          t0, metric, v_base)
         return restrict((march(parts) - x0) / eps)
 
     # the start: the map's change of the base state, the transient the run left, which holds
@@ -353,8 +459,14 @@ def _arnoldi_on_map(integ, steps: int, keys: list[str], weight: Array, symmetry,
     change = restrict(x0 - np.concatenate(start) / weight)
     size = np.linalg.norm(change)
     u0 = noise / np.linalg.norm(noise) * NOISE + (change / size if size > 0 else 0.0)
-    vals, res, ritz = arnoldi(action, u0, vectors, min_steps=min_vectors, tol=accuracy,
-                              ritz_vectors=True)
+    vals, res, ritz, basis, hess = arnoldi(action, u0, vectors, min_steps=min_vectors,
+                                           tol=accuracy, krylov=True)
+    subspace = None
+    if probe is not None:
+        # seen[0] is the base march, seen[1 + j] the march from Krylov vector j
+        base_seen = seen[0]
+        cols = [((o - base_seen) / eps).ravel() for o in seen[1 : 1 + basis.shape[1]]]
+        subspace = SlowSubspace(keys, weight, basis, hess, np.column_stack(cols))
     # the largest pair checked by a fresh application of the map: Arnoldi's residual estimate
     # holds for an exactly linear operator only, and a map whose finite differences carry
     # noise (a Newton stopped at its roundoff floor) can show tiny estimates for a wrong Ritz
@@ -371,4 +483,5 @@ def _arnoldi_on_map(integ, steps: int, keys: list[str], weight: Array, symmetry,
     mult = vals**sectors
     order = np.argsort(-np.abs(mult), kind="stable")
     return MapMultipliers(mult[order], rel[order], accuracy, count,
-                          (ritz[:, order] * weight[:, None]).reshape(len(keys), n, -1), fresh)
+                          (ritz[:, order] * weight[:, None]).reshape(len(keys), n, -1), fresh,
+                          subspace)

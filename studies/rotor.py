@@ -70,7 +70,10 @@ moment about the shaft axis, mean × Ω), blade 0's flap angle and its first har
 in-plane hub moments at the fuselage-beam's top (:data:`OUTPUTS`). With ``trim`` the controls
 are found with the periodic response (:mod:`studies.trim`). With ``floquet`` the periodic
 response's largest Floquet multiplier is found by Arnoldi on the quarter-revolution map
-(:func:`solver.period_map.map_multipliers`).
+(:func:`solver.period_map.map_multipliers`); that run also records what the samples show of
+each Krylov vector, and the periodic response found after it (the wake's error estimate's,
+with the wake refined) restarts by Newton–Picard on the map's slow modes
+(:class:`solver.period_map.SlowSubspace`) before the extrapolation.
 
 ``docs/models.md`` gives the assumptions, the defaults and the measured accuracy.
 """
@@ -100,7 +103,7 @@ from solver.joints import Revolute, Rigid
 from solver.lifting_line import LiftingLine
 from solver.modal import ModalAttachment, ModalStructure
 from solver.model import Model
-from solver.period_map import map_multipliers
+from solver.period_map import MapMultipliers, map_multipliers
 from solver.rotations import rotation_about
 from solver.section_wind import PeriodicWind
 from solver.sections import SectionTable, isotropic_section
@@ -910,6 +913,15 @@ _BLADE_INDEX = np.array([[_Sampler.COLUMNS.index(c if k == 0 else f"{c}_{k}")
 _PINS = slice(len(_Sampler.COLUMNS), len(_Sampler.COLUMNS) + N_BIFILARS)
 
 
+# the columns of _Sampler's rows Newton–Picard observes (simulate's observe_slow): all but the
+# time, the mean inflow (the wake's table enters it directly) and the shaft torque (its mean is
+# the rotor's power), and the pins (columns that stay zero, the pitch links' without links,
+# drop out)
+SLOW_OBSERVED = np.array([*(i for i, c in enumerate(_Sampler.COLUMNS)
+                            if c not in ("t", "lam0", "torque")),
+                          *range(_PINS.start, _PINS.stop)])
+
+
 def align(block: np.ndarray, j: int) -> np.ndarray:
     """Rows of :class:`_Sampler` ending j quarter revolutions after t = 0, moved to the phase
     of t = 0 (:func:`studies.periodic.sector_response`): the fixed-frame and whole-rotor
@@ -1084,8 +1096,18 @@ def simulate(p: Parameters) -> xr.Dataset:
     observed = [*(_Sampler.COLUMNS.index(c) for c in ("x", "y", "fx", "fy", "m11", "m22")),
                 *range(_PINS.start, _PINS.stop)]
 
+    # quarter revolutions per iterate of the map shot on (4 on the quarter-revolution map, 1
+    # on the one-revolution map, after which every blade and pin is back in its own place)
+    per_iterate = N_BLADES // (1 if shooting_symmetry(system, parts) is None else N_BLADES)
+
     def observe(block: np.ndarray, j: int) -> np.ndarray:
-        return align(block, j)[:, observed]
+        return align(block, j * per_iterate)[:, observed]
+
+    def observe_slow(block: np.ndarray, j: int) -> np.ndarray:
+        # what Newton–Picard measures the slow modes' amplitudes on: every load and angle the
+        # samples hold (the blades' root loads and flap angles tell the rotor's modes apart,
+        # which the hub's signals alone leave ill-conditioned)
+        return align(block, j * per_iterate)[:, SLOW_OBSERVED]
 
     hint = "raise max_revolutions, settle_revolutions or pin_damping_ratio"
     sector = 2 * np.pi / omega / N_BLADES  # s
@@ -1095,6 +1117,8 @@ def simulate(p: Parameters) -> xr.Dataset:
     outer = (max(p.periodic_tolerance, OUTER_TOLERANCE) if wake is not None or trimmer
              else p.periodic_tolerance)
 
+    slow = None  # the slow modes' subspace, once an Arnoldi run has found it
+
     def periodic_response(tolerance: float = p.periodic_tolerance) -> periodic.PeriodicRecord:
         if p.shooting_window:
             return shoot(integ, lambda: sampler(integ), signals, observe=observe,
@@ -1103,7 +1127,8 @@ def simulate(p: Parameters) -> xr.Dataset:
                          revolutions=p.revolutions, max_revolutions=p.max_revolutions,
                          tolerance=tolerance, groups=groups, separate_mean=True,
                          floor=floor, observe_floor=observe_floor, window=p.shooting_window,
-                         max_restarts=p.shooting_restarts, hint=hint)
+                         max_restarts=p.shooting_restarts, subspace=slow,
+                         observe_slow=observe_slow, hint=hint)
         return march(step, lambda: sampler(integ), signals, steps_per_rev=nrev,
                      revolutions=p.revolutions, max_revolutions=p.max_revolutions,
                      tolerance=tolerance, groups=groups, separate_mean=True,
@@ -1186,9 +1211,17 @@ def simulate(p: Parameters) -> xr.Dataset:
             report(f"step-error estimate {est.estimate:.3g} "
                    f"({est.integrator.n_steps / est.steps_per_rev:.2f} revolutions at "
                    f"{est.steps_per_rev} steps)")
-    floquet, floquet_note = _multipliers(p, integ, system, parts)
+    # the multipliers' Arnoldi run; where a periodic response is found after it (the wake's
+    # error estimate's), it also records what the samples show of each of its vectors: the
+    # slow subspace of the map, for that response's Newton–Picard restarts
+    after = wake is not None and p.wake_error_estimate
+    floquet, floquet_note, mm = _multipliers(
+        p, integ, system, parts,
+        probe=partial(_Sampler(system, parts, record_wake=False), integ) if after else None,
+        observe=partial(observe_slow, j=1))
+    slow = None if mm is None else mm.subspace
     wake_error, wake_note = float("nan"), ""
-    if wake is not None and p.wake_error_estimate:
+    if after:
         # the wake's truncation error of the vibratory loads: the periodic response again
         # with the wake refined (twice the segments per turn and twice the turns), against
         # the recorded one
@@ -1314,29 +1347,30 @@ def simulate(p: Parameters) -> xr.Dataset:
     return SPEC.dataset(values, {"message": note})
 
 
-def _multipliers(p: Parameters, integ, system: System, parts: RotorParts
-                 ) -> tuple[dict[str, np.float64], str]:
+def _multipliers(p: Parameters, integ, system: System, parts: RotorParts, *, probe=None,
+                 observe=None) -> tuple[dict[str, np.float64], str, MapMultipliers | None]:
     """The ``floquet_multiplier_max`` of the periodic response ``integ`` ends on (a whole
-    revolution), or none and why."""
+    revolution), or none and why, and the Arnoldi run's result (with ``probe`` and
+    ``observe``, :func:`~solver.period_map.map_multipliers`'s, its slow subspace)."""
     if not p.floquet:
-        return {}, ""
+        return {}, "", None
     t = time.perf_counter()
     try:
         sym = shooting_symmetry(system, parts)
         sectors = N_BLADES if sym is not None else 1
         mm = map_multipliers(integ, p.steps_per_rev // sectors, symmetry=sym, rate=p.hub_speed,
                              vectors=FLOQUET_VECTORS, eps=FLOQUET_EPS, tol=FLOQUET_TOL,
-                             accuracy=FLOQUET_ACCURACY)
+                             accuracy=FLOQUET_ACCURACY, probe=probe, observe=observe)
     except (RuntimeError, ValueError) as exc:
-        return {}, f"no Floquet multipliers: {exc}"
+        return {}, f"no Floquet multipliers: {exc}", None
     report(f"Floquet multipliers: largest {mm.largest:.4f} ({mm.evaluations} maps of 1/"
            f"{sectors} revolution, {time.perf_counter() - t:.1f} s; residual "
            f"{mm.residuals[0]:.1e}, "
            f"fresh {mm.fresh_residual:.1e})")
     if mm.failure:
-        return {}, mm.failure
+        return {}, mm.failure, mm
     return {"floquet_multiplier_max": np.float64(mm.largest),
-            "run_floquet_revolutions": np.float64(mm.evaluations / sectors)}, ""
+            "run_floquet_revolutions": np.float64(mm.evaluations / sectors)}, "", mm
 
 
 def _spinning(system: System, parts: RotorParts) -> tuple[list[list[Any]], list[Any]]:
@@ -1462,6 +1496,6 @@ def _check(p: Parameters) -> Parameters | None:
 SPEC = ModelSpec("rotor", PARAMETERS, simulate, _check,
                  description="four-bladed elastic UH-60 rotor with aerodynamics and four "
                              "bifilars on a fuselage-beam",
-                 outputs=OUTPUTS, version="11",
+                 outputs=OUTPUTS, version="12",
                  # the two parts take about as long to compile (curve joints / the rest)
                  warm_up=(partial(compile_bifilar, "galpha"), compile_kernels))
