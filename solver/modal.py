@@ -512,6 +512,7 @@ def _add_arc_terms(qb: QuadraticBuilder, rows: NDArray[np.int64], phi_r: Array, 
     w = phi_r.T @ arm  # θ·r = w·u
     gram = phi_r.T @ phi_r  # θ·θ = uᵀ gram u
     n = phi_r.shape[1]
+    lin = np.zeros((3, n))
     for k in range(3):
         a = np.outer(phi_r[k], w) - arm[k] * gram
         s = -0.25 * (a + a.T)  # −½ times the symmetric part
@@ -520,13 +521,11 @@ def _add_arc_terms(qb: QuadraticBuilder, rows: NDArray[np.int64], phi_r: Array, 
             for j in range(n):
                 if s[i, j] != 0.0:
                     qb.add_product(row, eta + i, eta + j, float(s[i, j]))
-        lin = -2.0 * (s @ eta0)
-        for j in range(n):
-            if lin[j] != 0.0:
-                qb.add_linear(row, eta + j, float(lin[j]))
+        lin[k] = -2.0 * (s @ eta0)
         const = float(eta0 @ s @ eta0)
         if const != 0.0:
             qb.add_constant(row, const)
+    _add_modal_terms(qb, rows, lin, eta)
 
 
 def _add_modal_terms(qb: QuadraticBuilder, rows: NDArray[np.int64], phi: Array,

@@ -194,18 +194,17 @@ def add_pitch_link(model: Model, hub, root, k: int, azimuth: float, hinge_radius
     z0 = ring_height(theta_start, h, length)[0]
     lower = hinge + h * et + (z0 - length) * Z
     end = hinge + h * (math.cos(theta_start) * et + math.sin(theta_start) * Z)
-    if pitch is None:
-        link = AxialSpring(f"pitch_link{k}", hub, lower, root, end, stiffness=stiffness,
-                           rest_length=length)
-        model.add(link)
-        return PitchLink(None, None, link, end, lower)
-    ring = RigidBody(f"ring{k}", 0.0, position=lower, orientation=rotation_about(Z, azimuth),
-                     velocity=np.cross(omega * Z, lower), angular_velocity=omega * Z)
-    drive = Prismatic(f"ring_drive{k}", hub, ring, point=lower, axis=Z,
-                      driven=ring_drive(pitch, h, z0, length))
-    link = AxialSpring(f"pitch_link{k}", ring, lower, root, end, stiffness=stiffness,
-                       rest_length=length)
-    model.add(ring, drive, link)
+    ring = drive = None
+    if pitch is not None:  # the link's lower end on the ring point the controls drive
+        ring = RigidBody(f"ring{k}", 0.0, position=lower,
+                         orientation=rotation_about(Z, azimuth),
+                         velocity=np.cross(omega * Z, lower), angular_velocity=omega * Z)
+        drive = Prismatic(f"ring_drive{k}", hub, ring, point=lower, axis=Z,
+                          driven=ring_drive(pitch, h, z0, length))
+        model.add(ring, drive)
+    link = AxialSpring(f"pitch_link{k}", hub if ring is None else ring, lower, root, end,
+                       stiffness=stiffness, rest_length=length)
+    model.add(link)
     return PitchLink(ring, drive, link, end, lower)
 
 
