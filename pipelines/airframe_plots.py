@@ -29,9 +29,9 @@ import xarray as xr
 from matplotlib.figure import Figure
 
 from pipelines.archive import STATUS_OK
-from pipelines.envelope_plots import HARMONIC, LOADS, SWING_LEVEL, _pin_swing
+from pipelines.envelope_plots import HARMONIC, LOADS, SWING_LEVEL, _pin_swing, case_variable
+from studies.airframe import G0
 
-G0 = 9.80665  # m s-2: the unit g of the cabin vibration
 # The models a case may stand for, by (fuselage, control_system): legend text and bar colour.
 MODELS = {
     ("beam", "prescribed"): ("paper's model (fuselage-beam, prescribed pitch)", "tab:blue"),
@@ -59,8 +59,8 @@ def _cases(ds: xr.Dataset) -> list[tuple[str, dict[str, int], tuple[str, str]]]:
     for case in archive_cases(ds):
         if not case.ok:
             continue
-        fuselage = str(_case_value(ds, "fuselage", case.sel).values.item())
-        control = (str(_case_value(ds, "control_system", case.sel).values.item())
+        fuselage = str(case_variable(ds, "fuselage", case.sel).values.item())
+        control = (str(case_variable(ds, "control_system", case.sel).values.item())
                    if "control_system" in ds else "prescribed")
         out.append((case.label, case.sel, (fuselage, control)))
     return out
@@ -70,13 +70,8 @@ def station_vibration(ds: xr.Dataset, sel: dict[str, int], harmonic: int = HARMO
                       ) -> np.ndarray:
     """The vibration (g) at each station of one case: the magnitude of the ``harmonic``-th
     harmonic of the station's acceleration vector, √(Σ over x, y, z of its amplitude²)."""
-    amp = _case_value(ds, "station_acceleration_amplitude", sel).sel(harmonic=harmonic)
+    amp = case_variable(ds, "station_acceleration_amplitude", sel).sel(harmonic=harmonic)
     return np.sqrt((amp.transpose("station", "direction").values ** 2).sum(axis=1)) / G0
-
-
-def _case_value(ds: xr.Dataset, name: str, sel: dict[str, int]) -> xr.DataArray:
-    var = ds[name]
-    return var.isel({d: i for d, i in sel.items() if d in var.dims})
 
 
 def _bars(ax: Any, labels: Sequence[str], values: Sequence[float],
@@ -121,7 +116,7 @@ def airframe_figures(ds: xr.Dataset, out_dir: Path, formats: Sequence[str]) -> l
         for ax, (var, direction, title) in zip(axes, loads.values(), strict=False):
             values = []
             for _, sel, _ in cases:
-                amp = _case_value(ds, var, sel).sel(harmonic=HARMONIC)
+                amp = case_variable(ds, var, sel).sel(harmonic=HARMONIC)
                 values.append(float(amp.sel(direction=direction) if direction else amp))
             unit = "N m" if "moment" in var else "N"
             _bars(ax, labels, values, models)

@@ -63,10 +63,16 @@ RESULTS = frozenset({*LOADS, *CONTROLS, "rotor_power", "pin_swing", "force", "mo
                      "force_locked", "force_z_locked", "moment_locked"})
 
 
+def case_variable(ds: xr.Dataset, name: str, sel: dict[str, int]) -> xr.DataArray:
+    """Variable ``name`` of one case (``sel``: the case's indices along the archive's case
+    dimensions; those the variable lacks are left out)."""
+    var = ds[name]
+    return var.isel({d: i for d, i in sel.items() if d in var.dims})
+
+
 def _value(ds: xr.Dataset, name: str, sel: dict[str, int]) -> Any:
     """A variable's value for one case (scalars are common to every case)."""
-    var = ds[name]
-    value = var.isel({d: i for d, i in sel.items() if d in var.dims}).values
+    value = case_variable(ds, name, sel).values
     value = value.item() if value.ndim == 0 else value
     return value.decode() if isinstance(value, bytes) else value
 
@@ -75,7 +81,7 @@ def _pin_swing(ds: xr.Dataset, sel: dict[str, int]) -> float:
     """Half the peak-to-peak pin angle over the recorded revolution, largest bifilar (degree)."""
     if "pin_angle" not in ds:
         return np.nan
-    var = ds["pin_angle"].isel({d: i for d, i in sel.items() if d in ds["pin_angle"].dims})
+    var = case_variable(ds, "pin_angle", sel)
     time = [d for d in var.dims if d in ("time_in_rev", "sample")]
     if not time:
         return np.nan
@@ -98,8 +104,7 @@ def case_table(ds: xr.Dataset, parameters: Sequence[str]) -> pd.DataFrame:
         for column, (var, direction, _title) in LOADS.items():
             if var not in ds:
                 continue
-            amp = ds[var].isel({d: i for d, i in sel.items() if d in ds[var].dims})
-            amp = amp.sel(harmonic=HARMONIC)
+            amp = case_variable(ds, var, sel).sel(harmonic=HARMONIC)
             row[column] = float(amp.sel(direction=direction) if direction else amp)
         for name in (*CONTROLS, "rotor_power"):
             if name in ds:

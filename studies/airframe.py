@@ -139,6 +139,7 @@ if TYPE_CHECKING:
 Array = NDArray[np.float64]
 
 DIRECTIONS = ("x", "y", "z")  # the station outputs' direction labels (model axes)
+G0 = 9.80665  # m s-2, standard gravity: the unit g of the stations' vibration
 HUB_COMPONENTS = ("translation x", "translation y", "translation z", "rotation x",
                   "rotation y", "rotation z")
 TOP_KEYS = ("title", "source", "hub", "centre_of_gravity", "stations", "modes")

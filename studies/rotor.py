@@ -116,7 +116,7 @@ from studies import periodic, rotor_wake, swashplate, trim
 from studies.absorbers import N_BIFILARS, AbsorberProbe, add_absorbers, holes_for, pin_damping
 from studies.absorbers import OUTPUTS as ABSORBER_OUTPUTS
 from studies.absorbers import PARAMETERS as ABSORBERS
-from studies.airframe import DIRECTIONS, Airframe, default_airframe_path, read_airframe
+from studies.airframe import DIRECTIONS, G0, Airframe, default_airframe_path, read_airframe
 from studies.bifilar import BifilarParts
 from studies.bifilar import compile_kernels as compile_bifilar
 from studies.equivalent import EquivalentParts
@@ -136,7 +136,6 @@ from studies.uh60a import (
 )
 
 Z = np.array([0.0, 0.0, 1.0])
-G0 = 9.80665  # m s-2, standard gravity: the unit g of the pilot seat's vibration
 N_BLADES = 4
 FT = 0.3048  # m
 # Newton's tolerance on the updates of q, relative to q's scale (its largest coordinate, a
