@@ -29,7 +29,9 @@ revolution the table is updated from blade 0's last revolution (its sections' po
 tip, its circulation and the Peters–He inflow at every time step) with under-relaxation
 ``wake_relaxation``; then the run alternates shooting to the periodic response for the current
 table and updating it (Anderson-accelerated: :func:`anderson_step`), until the update changes
-the table by less than ``wake_tolerance`` of its largest value. The wake's geometry needs the
+the table by less than ``wake_tolerance`` of its largest value. Each of those periodic
+responses is found only as closely as the table it answers is known: to the last update's
+change (:func:`studies.rotor.wake_response_tolerance`), the last to the case's tolerance. The wake's geometry needs the
 mean induced inflow (its descent through the disk): momentum theory's (Glauert) for the
 thrust of the previous revolution.
 

@@ -356,6 +356,18 @@ def test_newton_tolerance_falls_as_h_cubed_at_fine_steps():
     assert math.isclose(newton_tolerance(1920, wake), 1.953125e-10, rel_tol=1e-12)
 
 
+def test_wake_responses_are_found_to_the_wake_s_last_change():
+    """The periodic response the prescribed wake's next update starts from is found to the
+    wake's last change (an inexact fixed-point iteration), never tighter than the outer
+    tolerance nor looser than OUTER_CAP times it (before the first update the change is
+    infinite)."""
+    from studies.rotor import OUTER_CAP, wake_response_tolerance
+
+    assert wake_response_tolerance(1e-2, 0.031) == 0.031
+    assert wake_response_tolerance(1e-2, 4e-3) == 1e-2
+    assert wake_response_tolerance(1e-2, math.inf) == OUTER_CAP * 1e-2 == 0.05
+
+
 def test_wake_states_are_judged_on_their_own_tolerance():
     """Newton judges the lifting lines' wake states (m/s) on WAKE_TOLERANCE times the
     tolerance of the other unknowns (the velocity error the positions' tolerance admits is
