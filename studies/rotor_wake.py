@@ -31,9 +31,9 @@ tip, its circulation and the Peters–He inflow at every time step) with under-r
 table and updating it (Anderson-accelerated: :func:`anderson_step`), until the update changes
 the table by less than ``wake_tolerance`` of its largest value. Each of those periodic
 responses is found only as closely as the table it answers is known: to the last update's
-change (:func:`studies.rotor.wake_response_tolerance`), the last to the case's tolerance. The wake's geometry needs the
-mean induced inflow (its descent through the disk): momentum theory's (Glauert) for the
-thrust of the previous revolution.
+change (:func:`studies.rotor.wake_response_tolerance`), the last to the case's tolerance.
+The wake's geometry needs the mean induced inflow (its descent through the disk): momentum
+theory's (Glauert) for the thrust of the previous revolution.
 
 Assumptions: the wake is prescribed, not free (no self-induced distortion beyond Beddoes'
 descent law, no contraction in hover); one rolled-up tip vortex per blade, no inboard trailed
