@@ -127,28 +127,41 @@ def test_newton_picard_correction_removes_the_slow_error_of_a_linear_map(fast):
     assert unexplained <= (1e-12 if fast == 0.0 else 1e-2)
 
 
-def test_newton_picard_restart_of_the_rolling_disc():
-    # the disc swinging about the hole's outermost point decays by 0.70 a revolution; one
-    # Newton–Picard correction from two revolutions' observations of the disc's centre (the
-    # probe, through the multipliers' Arnoldi run) leaves a small fraction of the swing
-    model, _, disc = hub_rolling_disc(0.0, damping=DAMPING)
+STEPS = 200  # the disc's steps a revolution
+
+
+def _disc_off_its_rest(damping: float, amplitude: float):
+    """The rolling disc at rest on the spinning hub (``damping`` its rolling resistance), the
+    Arnoldi run on its revolution map that probes the disc's centre, and a start off the rest
+    along the swing's mode (``amplitude`` of its largest position, m): (system, integrator,
+    probe, multipliers, the start's state arrays in the subspace's keys)."""
+    model, _, disc = hub_rolling_disc(0.0, damping=damping)
     system = System(model)
-    steps = 200
-    integ = make_integrator(system, "galpha", 2 * np.pi / OMEGA / steps, rho_inf=0.8, tol=1e-10)
+    integ = make_integrator(system, "galpha", 2 * np.pi / OMEGA / STEPS, rho_inf=0.8, tol=1e-10)
     o = system.offset[disc]
 
     def probe() -> np.ndarray:
         return integ.q[o : o + 3].copy()
 
-    mm = map_multipliers(integ, steps, rate=OMEGA, vectors=12, min_vectors=4, eps=1e-4,
+    mm = map_multipliers(integ, STEPS, rate=OMEGA, vectors=12, min_vectors=4, eps=1e-4,
                          probe=probe)
+    rest = integ.state()
+    swing = np.real(mm.modes[:, :, 0])  # the swing's mode, in the state's units
+    start = perturbed(system, [rest[k] for k in mm.subspace.keys],
+                      list(amplitude * swing / np.abs(swing[0]).max()), rest["t"],
+                      kinetic_metric(system))
+    return system, integ, probe, mm, start
+
+
+def test_newton_picard_restart_of_the_rolling_disc():
+    # the disc swinging about the hole's outermost point decays by 0.70 a revolution; one
+    # Newton–Picard correction from two revolutions' observations of the disc's centre (the
+    # probe, through the multipliers' Arnoldi run) leaves a small fraction of the swing
+    system, integ, probe, mm, start = _disc_off_its_rest(DAMPING, 1e-3)
+    steps = STEPS
     sub = mm.subspace
     assert sub is not None and sub.observed.shape == (3 * steps, sub.basis.shape[1])
     rest = integ.state()
-    swing = np.real(mm.modes[:, :, 0])  # the swing's mode, in the state's units
-    start = perturbed(system, [rest[k] for k in sub.keys],
-                      list(1e-3 * swing / np.abs(swing[0]).max()), rest["t"],
-                      kinetic_metric(system))
     state = dict(rest)
     state.update(zip(sub.keys, start, strict=True))
 
@@ -185,22 +198,9 @@ def test_shooting_restarts_by_newton_picard_alone_with_the_slow_subspace():
 
     # less rolling resistance than above: the swing decays by 0.87 a revolution, above the
     # slow modes' threshold SLOW_MODULUS
-    model, _, disc = hub_rolling_disc(0.0, damping=0.4 * DAMPING)
-    system = System(model)
-    steps = 200
-    integ = make_integrator(system, "galpha", 2 * np.pi / OMEGA / steps, rho_inf=0.8, tol=1e-10)
-    o = system.offset[disc]
-
-    def probe() -> np.ndarray:
-        return integ.q[o : o + 3].copy()
-
-    mm = map_multipliers(integ, steps, rate=OMEGA, vectors=12, min_vectors=4, eps=1e-4,
-                         probe=probe)
+    system, integ, probe, mm, start = _disc_off_its_rest(0.4 * DAMPING, 1e-2)
+    steps = STEPS
     rest = integ.state()
-    swing = np.real(mm.modes[:, :, 0])
-    start = perturbed(system, [rest[k] for k in mm.subspace.keys],
-                      list(1e-2 * swing / np.abs(swing[0]).max()), rest["t"],
-                      kinetic_metric(system))
 
     def run(subspace) -> tuple[object, list[str]]:
         state = dict(rest)
