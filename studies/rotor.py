@@ -1118,6 +1118,9 @@ def simulate(p: Parameters) -> xr.Dataset:
     # quarter revolutions per iterate of the map shot on (4 on the quarter-revolution map, 1
     # on the one-revolution map, after which every blade and pin is back in its own place)
     per_iterate = N_BLADES // (1 if shooting_symmetry(system, parts) is None else N_BLADES)
+    # Newton–Picard's restarts (which leave the extrapolation's out) on the quarter-revolution
+    # map only (see `early` below)
+    picard = per_iterate == 1
 
     def observe(block: np.ndarray, j: int) -> np.ndarray:
         return align(block, j * per_iterate)[:, observed]
@@ -1212,26 +1215,39 @@ def simulate(p: Parameters) -> xr.Dataset:
         # the multipliers' Arnoldi run on the periodic response integ ends on; with ``probe``
         # it also records what the samples show of each of its vectors: the map's slow
         # subspace, for the Newton–Picard restarts of the periodic responses found after it
-        nonlocal slow
+        nonlocal slow, spent
         found, note, mm = _multipliers(
             p, integ, system, parts,
             probe=partial(_Sampler(system, parts, record_wake=False), integ) if probe else None,
             observe=partial(observe_slow, j=1))
         if mm is not None and mm.subspace is not None:
             slow = mm.subspace
+        if mm is not None:  # the revolutions of every Arnoldi run, a failed one's included
+            spent += mm.evaluations / (N_BLADES // per_iterate)
+            if found:
+                found["run_floquet_revolutions"] = np.float64(spent)
         return found, note
 
-    # With a last periodic response to come (after the wake's or the trim's iterations), the
-    # multipliers are found first, on the response those ended on, and that response and the
-    # wake error estimate's restart by Newton–Picard from them: the response to 1e-3 the
-    # extrapolation stalls on (its restarts land at 1.2–2e-3), 5.5 revolutions where marching
-    # takes 15 on Table 1's case 1. The two responses differ within the outer tolerance,
-    # which moves the largest multiplier by less than FLOQUET_ACCURACY (Table 1: by 7e-5 at
-    # most, 0.91442 on case 1 against 0.91440 on its last response).
+    spent = 0.0  # revolutions of the multipliers' perturbed maps
+
+    # With a last periodic response to come (after the wake's or the trim's iterations) on the
+    # quarter-revolution map, the multipliers are found first, on the response those ended on,
+    # and that response and the wake error estimate's restart by Newton–Picard alone from
+    # them: the response to 1e-3 the extrapolation stalls on (its restarts land at 1.2–2e-3),
+    # 5.5 revolutions where marching takes 15 on Table 1's case 1. The two responses differ
+    # within the outer tolerance, which moves the largest multiplier by less than
+    # FLOQUET_ACCURACY (Table 1: by 7e-5 at most, 0.91442 on case 1 against 0.91440 on its
+    # last response). Not on the one-revolution map of a modal airframe, whose Newton–Picard
+    # restarts can miss (the airframe study's locked case: each of four grew the change, from
+    # 1.2e-2 to 4.3e-2 after the first, and the refined wake's response was marched, 70
+    # revolutions; by the extrapolation's restarts the last response took 12): there the
+    # multipliers come last and the responses shoot by extrapolation.
     last = outer > p.periodic_tolerance
+    early = last and picard
     refined = wake is not None and p.wake_error_estimate  # the wake error estimate's response
-    if last:
+    if early:
         floquet, floquet_note = multipliers(probe=True)
+    if last:
         transient += rec.transient + p.revolutions
         rec = periodic_response()
     est = None
@@ -1257,8 +1273,10 @@ def simulate(p: Parameters) -> xr.Dataset:
             report(f"step-error estimate {est.estimate:.3g} "
                    f"({est.integrator.n_steps / est.steps_per_rev:.2f} revolutions at "
                    f"{est.steps_per_rev} steps)")
-    if not last:
-        floquet, floquet_note = multipliers(probe=refined)
+    if not early or (p.floquet and not floquet):
+        # (found before the last response, the largest pair may fail its fresh check when a
+        # perturbed march took another Newton path: then on the last response again)
+        floquet, floquet_note = multipliers(probe=refined and picard)
     wake_error, wake_note = float("nan"), ""
     if refined:
         # the wake's truncation error of the vibratory loads: the periodic response again
