@@ -1238,10 +1238,10 @@ def simulate(p: Parameters) -> xr.Dataset:
     # within the outer tolerance, which moves the largest multiplier by less than
     # FLOQUET_ACCURACY (Table 1: by 7e-5 at most, 0.91442 on case 1 against 0.91440 on its
     # last response). Not on the one-revolution map of a modal airframe, whose Newton–Picard
-    # restarts can miss (the airframe study's locked case: each of four grew the change, from
-    # 1.2e-2 to 4.3e-2 after the first, and the refined wake's response was marched, 70
-    # revolutions; by the extrapolation's restarts the last response took 12): there the
-    # multipliers come last and the responses shoot by extrapolation.
+    # restarts can miss (the airframe study's locked case: the first grew the change from
+    # 1.2e-2 to 4.3e-2, four left it at 2e-2, and the refined wake's response was then
+    # marched, 70 revolutions; by the extrapolation's restarts the last response took 12):
+    # there the multipliers come last and the responses shoot by extrapolation.
     last = outer > p.periodic_tolerance
     early = last and picard
     refined = wake is not None and p.wake_error_estimate  # the wake error estimate's response
