@@ -675,17 +675,18 @@ def shoot(integ, sample: Callable[[], Array], signals: Callable[[Array], Array],
         if window < 2 or restarts == max_restarts:
             continue
         obs.append(observe(block, phase()))
-        states.append(snapshot())
         raw.append((block, phase()))
         k = len(obs) - 1
         filled = filled or k >= window
         if subspace is not None:
             # Newton–Picard's restarts alone: the extrapolation's, whose fit leaves a part of
             # the change unexplained that the slowest modes amplify by 1/(1 − μ) (45 for the
-            # rotor's 0.978 a quarter revolution), would put the slow error back
+            # rotor's 0.978 a quarter revolution), would put the slow error back; its states
+            # are not kept
             slow_obs.append((observe_slow or observe)(block, phase()))
             newton_picard()
             continue
+        states.append(snapshot())
         if k < 2:
             continue
         scale = observed_scale(obs[-1])

@@ -1223,7 +1223,7 @@ def simulate(p: Parameters) -> xr.Dataset:
         if mm is not None and mm.subspace is not None:
             slow = mm.subspace
         if mm is not None:  # the revolutions of every Arnoldi run, a failed one's included
-            spent += mm.evaluations / (N_BLADES // per_iterate)
+            spent += mm.evaluations * per_iterate / N_BLADES
             if found:
                 found["run_floquet_revolutions"] = np.float64(spent)
         return found, note
@@ -1426,8 +1426,7 @@ def _multipliers(p: Parameters, integ, system: System, parts: RotorParts, *, pro
            f"fresh {mm.fresh_residual:.1e})")
     if mm.failure:
         return {}, mm.failure, mm
-    return {"floquet_multiplier_max": np.float64(mm.largest),
-            "run_floquet_revolutions": np.float64(mm.evaluations / sectors)}, "", mm
+    return {"floquet_multiplier_max": np.float64(mm.largest)}, "", mm
 
 
 def _spinning(system: System, parts: RotorParts) -> tuple[list[list[Any]], list[Any]]:
