@@ -14,14 +14,24 @@ import numpy as np
 
 @dataclass(frozen=True)
 class TimeFunction:
-    """f(t) with ḟ(t) and f̈(t). ``value``, ``rate``, ``accel`` map seconds to floats."""
+    """f(t) with ḟ(t) and f̈(t). ``value``, ``rate``, ``accel`` map seconds to floats;
+    ``joint``, if given, maps seconds to all three at once (a composed function's inner parts
+    then evaluated once: the constraints take every driver's three at each new time)."""
 
     value: Callable[[float], float]
     rate: Callable[[float], float]
     accel: Callable[[float], float]
+    joint: Callable[[float], tuple[float, float, float]] | None = None
 
     def __call__(self, t: float) -> tuple[float, float, float]:
+        if self.joint is not None:
+            return self.joint(t)
         return self.value(t), self.rate(t), self.accel(t)
+
+    @classmethod
+    def of(cls, joint: Callable[[float], tuple[float, float, float]]) -> TimeFunction:
+        """The function whose value, rate and acceleration ``joint(t)`` gives together."""
+        return cls(lambda t: joint(t)[0], lambda t: joint(t)[1], lambda t: joint(t)[2], joint)
 
 
 def constant(c: float) -> TimeFunction:
@@ -45,17 +55,21 @@ def harmonic(amplitude: float, omega: float, phase: float = 0.0) -> TimeFunction
 
 def sin_of(f: TimeFunction) -> TimeFunction:
     """sin(f(t)) with chain-rule derivatives."""
-    return TimeFunction(
-        lambda t: np.sin(f.value(t)),
-        lambda t: np.cos(f.value(t)) * f.rate(t),
-        lambda t: -np.sin(f.value(t)) * f.rate(t) ** 2 + np.cos(f.value(t)) * f.accel(t),
-    )
+
+    def joint(t: float) -> tuple[float, float, float]:
+        v, r, a = f(t)
+        s, c = np.sin(v), np.cos(v)
+        return s, c * r, -s * r * r + c * a
+
+    return TimeFunction.of(joint)
 
 
 def cos_of(f: TimeFunction) -> TimeFunction:
     """cos(f(t)) with chain-rule derivatives."""
-    return TimeFunction(
-        lambda t: np.cos(f.value(t)),
-        lambda t: -np.sin(f.value(t)) * f.rate(t),
-        lambda t: -np.cos(f.value(t)) * f.rate(t) ** 2 - np.sin(f.value(t)) * f.accel(t),
-    )
+
+    def joint(t: float) -> tuple[float, float, float]:
+        v, r, a = f(t)
+        s, c = np.sin(v), np.cos(v)
+        return c, -s * r, -c * r * r - s * a
+
+    return TimeFunction.of(joint)

@@ -174,24 +174,15 @@ class ControlSchedule:
         azimuth, with exact rate and acceleration (the controls' own rates included)."""
         om = self.omega
 
-        def parts(t: float):
+        def joint(t: float) -> tuple[float, float, float]:
             psi = om * t + azimuth
-            return self.values(t), math.cos(psi), math.sin(psi)
-
-        def value(t: float) -> float:
-            (c, _, _), cs, sn = parts(t)
-            return c[0] + c[1] * cs + c[2] * sn - reference
-
-        def rate(t: float) -> float:
-            (c, dc, _), cs, sn = parts(t)
-            return dc[0] + dc[1] * cs + dc[2] * sn + om * (-c[1] * sn + c[2] * cs)
-
-        def accel(t: float) -> float:
-            (c, dc, ddc), cs, sn = parts(t)
-            return (ddc[0] + ddc[1] * cs + ddc[2] * sn + 2 * om * (-dc[1] * sn + dc[2] * cs)
+            (c, dc, ddc), cs, sn = self.values(t), math.cos(psi), math.sin(psi)
+            return (c[0] + c[1] * cs + c[2] * sn - reference,
+                    dc[0] + dc[1] * cs + dc[2] * sn + om * (-c[1] * sn + c[2] * cs),
+                    ddc[0] + ddc[1] * cs + ddc[2] * sn + 2 * om * (-dc[1] * sn + dc[2] * cs)
                     - om * om * (c[1] * cs + c[2] * sn))
 
-        return TimeFunction(value, rate, accel)
+        return TimeFunction.of(joint)
 
 
 @dataclass(frozen=True)
