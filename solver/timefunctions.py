@@ -59,7 +59,7 @@ def sin_of(f: TimeFunction) -> TimeFunction:
     def joint(t: float) -> tuple[float, float, float]:
         v, r, a = f(t)
         s, c = np.sin(v), np.cos(v)
-        return s, c * r, -s * r * r + c * a
+        return s, c * r, -s * r**2 + c * a
 
     return TimeFunction.of(joint)
 
@@ -70,6 +70,6 @@ def cos_of(f: TimeFunction) -> TimeFunction:
     def joint(t: float) -> tuple[float, float, float]:
         v, r, a = f(t)
         s, c = np.sin(v), np.cos(v)
-        return c, -s * r, -c * r * r - s * a
+        return c, -s * r, -c * r**2 - s * a
 
     return TimeFunction.of(joint)

@@ -123,17 +123,12 @@ def ring_drive(pitch: TimeFunction, horn: float, start: float,
     for the commanded pitch θ(t) (``pitch``, rad, absolute), with the chain rule's rate and
     acceleration (the controls' own rates included)."""
 
-    def value(t: float) -> float:
-        return ring_height(pitch.value(t), horn, length)[0] - start
+    def joint(t: float) -> tuple[float, float, float]:
+        theta, rate, accel = pitch(t)
+        z, dz, ddz = ring_height(theta, horn, length)
+        return z - start, dz * rate, ddz * rate**2 + dz * accel
 
-    def rate(t: float) -> float:
-        return ring_height(pitch.value(t), horn, length)[1] * pitch.rate(t)
-
-    def accel(t: float) -> float:
-        _, dz, ddz = ring_height(pitch.value(t), horn, length)
-        return ddz * pitch.rate(t) ** 2 + dz * pitch.accel(t)
-
-    return TimeFunction(value, rate, accel)
+    return TimeFunction.of(joint)
 
 
 def swashplate_phase(horn: float, hinge_radius: float) -> float:

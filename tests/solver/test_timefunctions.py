@@ -4,12 +4,15 @@ import numpy as np
 import pytest
 
 from solver.timefunctions import cos_of, harmonic, sin_of
+from studies.swashplate import ring_drive
 from studies.trim import ControlSchedule
 
 
 def _differenced(f, t: float, h: float = 1e-4) -> tuple[float, float]:
-    """Rate and acceleration of ``f.value`` by central differences (error O(h²) of the
-    derivatives: about 1e-8 of their scale here)."""
+    """Rate and acceleration of ``f.value`` by central differences: their truncation and
+    roundoff errors, measured against the closed forms below, are at most 2e-8 and 4e-8 for
+    the harmonic's compositions (h = 1e-4) and 1.3e-8 and 1e-7 of the pitch's largest rate
+    and acceleration (h = 1e-5); the tolerances are ten times that."""
     up, mid, down = f.value(t + h), f.value(t), f.value(t - h)
     return (up - down) / (2 * h), (up - 2 * mid + down) / h**2
 
@@ -21,8 +24,8 @@ def test_composed_drivers_rate_and_acceleration(compose):
         value, rate, accel = f(t)
         assert value == f.value(t) and rate == f.rate(t) and accel == f.accel(t)
         d1, d2 = _differenced(f, t)
-        assert rate == pytest.approx(d1, abs=1e-7)
-        assert accel == pytest.approx(d2, abs=1e-5)
+        assert rate == pytest.approx(d1, abs=2e-7)
+        assert accel == pytest.approx(d2, abs=4e-7)
 
 
 def test_a_blade_pitch_during_a_control_ramp():
@@ -35,10 +38,11 @@ def test_a_blade_pitch_during_a_control_ramp():
         value, rate, accel = blade(t)
         assert value == blade.value(t)
         d1, d2 = _differenced(blade, t, h=1e-5)
-        assert rate == pytest.approx(d1, rel=1e-6, abs=1e-8)
-        assert accel == pytest.approx(d2, rel=1e-4, abs=1e-4)
-        # and composed as the pitch bearing's constraint takes it
-        s = sin_of(blade)
-        d1, d2 = _differenced(s, t, h=1e-5)
-        assert s(t)[1] == pytest.approx(d1, rel=1e-6, abs=1e-8)
-        assert s(t)[2] == pytest.approx(d2, rel=1e-4, abs=1e-4)
+        assert rate == pytest.approx(d1, abs=2.5e-7)
+        assert accel == pytest.approx(d2, abs=4.5e-5)
+        # and composed as the pitch bearing's constraint and the swashplate's ring drive take
+        # it (the ring's stroke for a 0.2 m horn: m, m/s, m/s²)
+        for f in (sin_of(blade), ring_drive(blade, 0.2, 0.01)):
+            d1, d2 = _differenced(f, t, h=1e-5)
+            assert f(t)[1] == pytest.approx(d1, abs=2.5e-7)
+            assert f(t)[2] == pytest.approx(d2, abs=4.5e-5)
