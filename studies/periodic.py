@@ -449,6 +449,7 @@ def shoot(integ, sample: Callable[[], Array], signals: Callable[[Array], Array],
           window: int = 12, max_restarts: int = 4, restart_fraction: float = 0.5,
           max_residual: float = 0.1, min_iterates: int = 4, secant: bool = False,
           subspace=None, observe_slow: Callable[[Array, int], Array] | None = None,
+          trust_estimate: bool = False,
           hint: str = "raise max_revolutions") -> PeriodicRecord:
     """Periodic response by shooting: extrapolate the fixed point of the sector map and
     restart the model from it, until two successive marched revolutions agree.
@@ -490,6 +491,13 @@ def shoot(integ, sample: Callable[[], Array], signals: Callable[[Array], Array],
     After ``max_restarts`` restarts without passing it, the model marches on from the last
     state (time marching as the fallback), and the record's note says so.
 
+    With ``trust_estimate``, a restart whose estimate put the state within the tolerance (its
+    unexplained part at most ``restart_fraction`` × ``tolerance``, not a full window's) is
+    taken at its word: the ``revolutions`` marched from it are the record, without the test's
+    two revolutions. For a response needed only as closely as the tolerance and never
+    recorded itself, such as one a prescribed wake is updated from; the record's ``change``
+    is then the estimate's unexplained part.
+
     Parameters
     ----------
     integ
@@ -522,6 +530,8 @@ def shoot(integ, sample: Callable[[], Array], signals: Callable[[Array], Array],
         the tolerance or the subspace leaves more than ``max_residual`` of the change
         unexplained; then the model marches on. The extrapolation's restarts are not used
         then (see :data:`SLOW_MODULUS`).
+    trust_estimate
+        Whether a restart within the tolerance ends the search (see above).
     hint
         Advice appended to the error when the response is not periodic in time.
 
@@ -627,6 +637,7 @@ def shoot(integ, sample: Callable[[], Array], signals: Callable[[Array], Array],
 
     change = float("inf")
     residual = 0.0
+    trusted: float | None = None  # a trusted restart's unexplained part (trust_estimate)
     gave_up = False
     # whether the iterates' changes settled below the level where a restart is tried, and
     # whether a window has filled: see `early` below
@@ -640,6 +651,12 @@ def shoot(integ, sample: Callable[[], Array], signals: Callable[[Array], Array],
         done += 1
         blocks.append(block)
         revs_done = done / n_sec
+        if trusted is not None and len(blocks) == revolutions * n_sec:
+            report(f"revolution {revs_done:g}: recorded as marched from the restart, whose "
+                   f"estimate was within the tolerance (unexplained {trusted:.2e})")
+            return PeriodicRecord(np.concatenate(blocks), int(np.ceil(revs_done - revolutions)),
+                                  trusted, residual=residual, restarts=restarts,
+                                  iterates=[*history])
         if len(blocks) >= 2 * n_sec and len(blocks) % n_sec == 0:
             cur = rev_harmonics(signals(np.concatenate(blocks[-n_sec:])))
             prev = rev_harmonics(signals(np.concatenate(blocks[-2 * n_sec : -n_sec])))
@@ -741,6 +758,8 @@ def shoot(integ, sample: Callable[[], Array], signals: Callable[[Array], Array],
         state.update(t=t_restart, q=q, v=v, **more)
         integ.restore(state)
         restarts += 1
+        if trust_estimate and unexplained <= restart_fraction * tolerance:
+            trusted = unexplained
         report(f"revolution {revs_done:g}: restarted from the extrapolated periodic state "
                f"(restart {restarts}, {k} iterates, unexplained part {residual:.3f}, weights up "
                f"to {np.abs(gamma).max():.3g})")
