@@ -254,3 +254,42 @@ def test_a_trusted_restart_ends_the_search_one_revolution_on():
     assert trusted.change <= 0.5e-4
     error = np.abs(trusted.samples[:, 1:3] - exact.samples[:, 1:3]).max() / scale
     assert error <= 1e-4
+
+
+def test_a_newton_picard_restart_that_grows_the_change_is_undone():
+    # a subspace whose Jacobian is wrong (the swing's multiplier μ mirrored to 2 − μ: its
+    # correction pushes the slow error the wrong way, 3.4 times over): the first test after
+    # the restart finds the change grown, the march goes on from the state before it without
+    # Newton–Picard, and the response is the rest orbit all the same
+    from studies.periodic import shoot
+    from studies.progress import reporting
+
+    system, integ, probe, mm, start = _disc_off_its_rest(0.4 * DAMPING, 1e-2)
+    sub = mm.subspace
+    n = sub.hessenberg.shape[0]
+    wrong = SlowSubspace(sub.keys, sub.weight, sub.basis, 2 * np.eye(n) - sub.hessenberg,
+                         sub.observed)
+    rest = integ.state()
+
+    def run(subspace, tolerance):
+        state = dict(rest)
+        state.update(zip(sub.keys, start, strict=True))
+        integ.restore(state)
+        lines: list[str] = []
+        with reporting(lines.append):
+            rec = shoot(integ, lambda: np.concatenate([[integ.t], probe()]),
+                        lambda block: block[:, 1:3], observe=lambda block, j: block[:, 1:4],
+                        symmetry=None, system=system, steps_per_rev=STEPS, revolutions=1,
+                        max_revolutions=60, tolerance=tolerance, subspace=subspace)
+        return rec, lines
+
+    rec, lines = run(wrong, 1e-6)
+    exact, _ = run(None, 1e-9)
+    assert any("grew" in x and "marching on from the state before it" in x for x in lines)
+    assert "after a Newton–Picard restart, found without it" in rec.note
+    scale = np.abs(exact.samples[:, 1:3] - exact.samples[:, 1:3].mean(axis=0)).max()
+    error = np.abs(rec.samples[:, 1:3] - exact.samples[:, 1:3]).max() / scale
+    # measured: the change grew from 1.9e-4 to 7.5e-4; from the state before the restart the
+    # extrapolation's restart found the response at revolution 10, 1.2e-8 of the centre's
+    # excursion from the rest orbit
+    assert error <= 1e-6
