@@ -625,8 +625,8 @@ def shoot(integ, sample: Callable[[], Array], signals: Callable[[Array], Array],
             return False
         if symmetry is not None:
             arrays = list(symmetry.back(*arrays, k=-k_now))
-        state = integ.state()
         undo = (integ.state(), done, change)
+        state = dict(undo[0])
         state.update(zip(["q", "v", *extra], arrays, strict=True))
         integ.restore(state)
         restarts += 1
