@@ -188,37 +188,43 @@ def test_newton_picard_restart_of_the_rolling_disc():
     assert newton < 0.02 * picard
 
 
+def _shoot_disc(disc, **options) -> tuple[object, list[str]]:
+    """studies.periodic.shoot on the disc of :func:`_disc_off_its_rest` (its tuple ``disc``)
+    from its start, its centre observed; the record and the progress lines."""
+    from studies.periodic import shoot
+    from studies.progress import reporting
+
+    system, integ, probe, mm, start, rest = disc
+    state = dict(rest)
+    state.update(zip(mm.subspace.keys, start, strict=True))
+    integ.restore(state)
+    lines: list[str] = []
+    with reporting(lines.append):
+        rec = shoot(integ, lambda: np.concatenate([[integ.t], probe()]),
+                    lambda block: block[:, 1:3], observe=lambda block, j: block[:, 1:4],
+                    symmetry=None, system=system, steps_per_rev=STEPS, revolutions=1,
+                    max_revolutions=60, **options)
+    return rec, lines
+
+
+def _slower_disc():
+    # less rolling resistance than above: the swing decays by 0.87 a revolution, above the
+    # slow modes' threshold SLOW_MODULUS; with the rest state to start from
+    system, integ, probe, mm, start = _disc_off_its_rest(0.4 * DAMPING, 1e-2)
+    return system, integ, probe, mm, start, integ.state()
+
+
 def test_shooting_restarts_by_newton_picard_alone_with_the_slow_subspace():
     # studies.periodic.shoot given the multipliers' subspace: the disc started off its swing's
     # rest reaches the periodic response (the rest, turning with the hub) by Newton–Picard's
     # restarts only, never the extrapolation's, and in fewer revolutions than shooting by
     # extrapolation, whose response it matches
-    from studies.periodic import shoot
-    from studies.progress import reporting
-
-    # less rolling resistance than above: the swing decays by 0.87 a revolution, above the
-    # slow modes' threshold SLOW_MODULUS
-    system, integ, probe, mm, start = _disc_off_its_rest(0.4 * DAMPING, 1e-2)
-    steps = STEPS
-    rest = integ.state()
-
-    def run(subspace) -> tuple[object, list[str]]:
-        state = dict(rest)
-        state.update(zip(mm.subspace.keys, start, strict=True))
-        integ.restore(state)
-        lines: list[str] = []
-        with reporting(lines.append):
-            rec = shoot(integ, lambda: np.concatenate([[integ.t], probe()]),
-                        lambda block: block[:, 1:3], observe=lambda block, j: block[:, 1:4],
-                        symmetry=None, system=system, steps_per_rev=steps, revolutions=1,
-                        max_revolutions=60, tolerance=1e-6, subspace=subspace)
-        return rec, lines
-
-    rec, lines = run(mm.subspace)
+    disc = _slower_disc()
+    rec, lines = _shoot_disc(disc, tolerance=1e-6, subspace=disc[3].subspace)
     restarts = [x for x in lines if "restart" in x]
     assert restarts and all("Newton–Picard restart" in x for x in restarts)
     # the recorded revolution is the rest orbit (the disc's centre, m), measured 0 m
-    extrapolated, _ = run(None)
+    extrapolated, _ = _shoot_disc(disc, tolerance=1e-6)
     # measured: one restart, periodic (1e-6 of the centre's 0.435 m excursion) after 4
     # revolutions against 6 by the extrapolation; the recorded revolutions (the disc's centre)
     # 4.9e-8 m apart, both periodic to 1e-6
@@ -226,34 +232,28 @@ def test_shooting_restarts_by_newton_picard_alone_with_the_slow_subspace():
     assert np.abs(rec.samples[:, 1:4] - extrapolated.samples[:, 1:4]).max() < 2e-7
 
 
+def _excursion_error(rec, exact) -> float:
+    """The largest distance of ``rec``'s disc centre from ``exact``'s, over the latter's
+    excursion."""
+    scale = np.abs(exact.samples[:, 1:3] - exact.samples[:, 1:3].mean(axis=0)).max()
+    return float(np.abs(rec.samples[:, 1:3] - exact.samples[:, 1:3]).max() / scale)
+
+
 def test_a_trusted_restart_ends_the_search_one_revolution_on():
     # studies.periodic.shoot(trust_estimate=True): the disc off its rest, shot by extrapolation
     # to 1e-4, returns the revolution marched from the first restart whose estimate was within
     # the tolerance, without the test's two revolutions; it is as close to the periodic
     # response (the rest orbit, found to 1e-8) as the tolerance
-    from studies.periodic import shoot
-
-    system, integ, probe, mm, start = _disc_off_its_rest(0.4 * DAMPING, 1e-2)
-    rest = integ.state()
-
-    def run(tolerance: float, trust: bool):
-        state = dict(rest)
-        state.update(zip(mm.subspace.keys, start, strict=True))
-        integ.restore(state)
-        return shoot(integ, lambda: np.concatenate([[integ.t], probe()]),
-                     lambda block: block[:, 1:3], observe=lambda block, j: block[:, 1:4],
-                     symmetry=None, system=system, steps_per_rev=STEPS, revolutions=1,
-                     max_revolutions=60, tolerance=tolerance, trust_estimate=trust)
-
-    trusted, tested, exact = run(1e-4, True), run(1e-4, False), run(1e-8, False)
-    scale = np.abs(exact.samples[:, 1:3] - exact.samples[:, 1:3].mean(axis=0)).max()
+    disc = _slower_disc()
+    trusted, _ = _shoot_disc(disc, tolerance=1e-4, trust_estimate=True)
+    tested, _ = _shoot_disc(disc, tolerance=1e-4)
+    exact, _ = _shoot_disc(disc, tolerance=1e-8)
     # measured: restarted after 5 revolutions, recorded the 6th (the test records the 7th),
     # the estimate's unexplained part 7.7e-8, both records 3.3e-8 and 2.8e-8 of the centre's
     # 0.435 m excursion from the rest orbit
     assert trusted.restarts == 1 and trusted.transient + 1 == tested.transient
     assert trusted.change <= 0.5e-4
-    error = np.abs(trusted.samples[:, 1:3] - exact.samples[:, 1:3]).max() / scale
-    assert error <= 1e-4
+    assert _excursion_error(trusted, exact) <= 1e-4
 
 
 def test_a_newton_picard_restart_that_grows_the_change_is_undone():
@@ -261,35 +261,16 @@ def test_a_newton_picard_restart_that_grows_the_change_is_undone():
     # correction pushes the slow error the wrong way, 3.4 times over): the first test after
     # the restart finds the change grown, the march goes on from the state before it without
     # Newton–Picard, and the response is the rest orbit all the same
-    from studies.periodic import shoot
-    from studies.progress import reporting
-
-    system, integ, probe, mm, start = _disc_off_its_rest(0.4 * DAMPING, 1e-2)
-    sub = mm.subspace
+    disc = _slower_disc()
+    sub = disc[3].subspace
     n = sub.hessenberg.shape[0]
     wrong = SlowSubspace(sub.keys, sub.weight, sub.basis, 2 * np.eye(n) - sub.hessenberg,
                          sub.observed)
-    rest = integ.state()
-
-    def run(subspace, tolerance):
-        state = dict(rest)
-        state.update(zip(sub.keys, start, strict=True))
-        integ.restore(state)
-        lines: list[str] = []
-        with reporting(lines.append):
-            rec = shoot(integ, lambda: np.concatenate([[integ.t], probe()]),
-                        lambda block: block[:, 1:3], observe=lambda block, j: block[:, 1:4],
-                        symmetry=None, system=system, steps_per_rev=STEPS, revolutions=1,
-                        max_revolutions=60, tolerance=tolerance, subspace=subspace)
-        return rec, lines
-
-    rec, lines = run(wrong, 1e-6)
-    exact, _ = run(None, 1e-9)
+    rec, lines = _shoot_disc(disc, tolerance=1e-6, subspace=wrong)
+    exact, _ = _shoot_disc(disc, tolerance=1e-9)
     assert any("grew" in x and "marching on from the state before it" in x for x in lines)
     assert "after a Newton–Picard restart, found without it" in rec.note
-    scale = np.abs(exact.samples[:, 1:3] - exact.samples[:, 1:3].mean(axis=0)).max()
-    error = np.abs(rec.samples[:, 1:3] - exact.samples[:, 1:3]).max() / scale
     # measured: the change grew from 1.9e-4 to 7.5e-4; from the state before the restart the
     # extrapolation's restart found the response at revolution 10, 1.2e-8 of the centre's
     # excursion from the rest orbit
-    assert error <= 1e-6
+    assert _excursion_error(rec, exact) <= 1e-6
