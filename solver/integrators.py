@@ -39,6 +39,7 @@ from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
+import scipy.sparse.linalg as spla
 from numpy.typing import ArrayLike, NDArray
 
 from solver.jit import njit
@@ -50,6 +51,7 @@ from solver.newton import (
     max_abs_weighted,
     newton,
 )
+from solver.sparse_lu import RefactorLU
 from solver.system import BLOCKS, System, _scatter_add, csc_pattern
 from solver.turning import TurningParts
 
@@ -71,6 +73,10 @@ PROJECTION_MAXITER = 50  # Iterations allowed for the initial projection onto C(
 # as they age from one to four steps.
 TURNED_STALE_RATE = 0.2
 TURNED_STALE_ITERATIONS = 8
+# The most memory a recorded Newton path's factors may hold (NewtonPath): the rotor's
+# quarter-revolution map keeps 60 factors of 3.1 MB each; a longer march keeps factors for its
+# first steps only, and its later steps solve with their own
+PATH_BYTES = 1e9
 
 
 # ---------------------------------------------------------------------- compiled step algebra
@@ -143,6 +149,30 @@ class StepInfo:
     iterations: int
     factorizations: int
     message: str = ""
+
+
+@dataclass
+class NewtonPath:
+    """A march's Newton solutions and the LU factors of the Newton matrix at each, recorded
+    (:meth:`Integrator.recording`) for marches from nearby states to follow
+    (:meth:`Integrator.following`): the finite differences of a map.
+
+    Near a recorded step the solution is the recorded one plus a small difference, and the
+    Newton matrix at the recorded solution is the one Newton needs: a following step starts
+    from the recorded x plus its difference extrapolated from the steps before, and solves
+    with the recorded factors. Newton then converges in about two iterations without a
+    factorization, where a march on its own starts from a predictor of the whole state and
+    keeps factors that age (the rotor's Floquet marches: six iterations a step at their tight
+    tolerance).
+    """
+
+    x: list[Array]  # each step's Newton solution
+    start: list[Array]  # each step's plain predictor (the difference's start on the first two)
+    lu: list[RefactorLU | None]  # factors of the Newton matrix at x (None: singular there,
+    # or beyond the memory budget)
+    angle: list[float]  # the spin angle of each step's matrix (turned factors)
+    budget: float = PATH_BYTES  # the most memory its factors may hold (bytes)
+    nbytes: int = 0  # the memory they hold
 
 
 @dataclass
@@ -296,6 +326,62 @@ class Integrator:
         self._retry = self.REUSE_RETRY
 
     @contextmanager
+    def recording(self) -> Iterator[NewtonPath]:
+        """While the block runs, keep each step's Newton solution and the LU factors of the
+        Newton matrix there (a fresh factorization per step): a :class:`NewtonPath` for
+        :meth:`following`."""
+        path = NewtonPath([], [], [], [])
+        self._recording = path
+        try:
+            yield path
+        finally:
+            self._recording = None
+
+    @contextmanager
+    def following(self, path: NewtonPath) -> Iterator[Integrator]:
+        """While the block runs, step k starts from the recorded step k's solution plus the
+        difference from it extrapolated over the previous steps, and solves with its
+        factors (see :class:`NewtonPath`); beyond the path's length, as usual. For marches
+        from states near the recorded march's start, at the same times."""
+        self._following, self._path_step, self._path_hist = path, 0, ()
+        try:
+            yield self
+        finally:
+            self._following = None
+
+    def _record(self, x: Array) -> None:
+        """Keep step x and the factors of the Newton matrix at it in the recording path."""
+        path = self._recording
+        lu: RefactorLU | None = None  # (then followed with the step's own factors)
+        last = next((f.nbytes for f in reversed(path.lu) if f is not None), 0)
+        if path.nbytes + last <= path.budget:  # (the next factors about the last's size)
+            lu = RefactorLU()
+            try:
+                lu.factor(self._jacobian(x))
+                path.nbytes += lu.nbytes
+            except (RuntimeError, ArithmeticError, spla.MatrixRankWarning):
+                lu = None
+        path.x.append(x.copy())
+        path.start.append(self._recorded_start)
+        path.lu.append(lu)
+        path.angle.append(self.lin.angle)
+
+    def _follow(self) -> Array | None:
+        """The Newton start of a step that follows the path (its factors put in place), or
+        None beyond its end."""
+        path, k = self._following, self._path_step
+        if k >= len(path.x):
+            return None
+        hist = self._path_hist
+        if len(hist) < 2:  # the plain predictors' difference
+            d = self._start() - path.start[k]
+        else:
+            d = _extrapolate(hist[0], hist[-2], hist[-1], self._nk, len(hist) == 3)
+        if path.lu[k] is not None and not self._full:
+            self.lin.lu, self.lin._angle_lu = path.lu[k], path.angle[k]
+        return path.x[k] + d
+
+    @contextmanager
     def tightened(self, tol: float) -> Iterator[Integrator]:
         """Newton's relative tolerance ``tol`` for every unknown alike (a per-unknown
         ``tolerance_scale`` suspended), confirmed by an update (never stopped on the error
@@ -324,6 +410,8 @@ class Integrator:
 
     _full = False
     _confirm = False  # Newton confirms convergence by an update, never on its estimate
+    _recording: NewtonPath | None = None
+    _following: NewtonPath | None = None
     _stale_failures = 0
     _skip_reuse = 0
     # steps after which reusing factors is tried again once it stopped paying, doubled after
@@ -390,19 +478,37 @@ class Integrator:
     def _solve(self) -> StepInfo:
         """One step: Newton on the scheme's residual with the scheme's tangent."""
         self._begin()
-        x0 = self._predict()
         if self.turning is not None:  # the spin angle of this step's matrices
             self.lin.angle = self.turning.rate * (self.t + self.h)
             self.lin.stages = self._nk // self.sys.n
-        res = newton(self._residual, self._jacobian, x0, self._error, self.tol * self.scale,
-                     self.lin, self._reuse_now(), full=self._full,
-                     estimate=self.tol >= ESTIMATE_TOL and not self._confirm,
-                     stale_rate=self.stale_rate,
-                     stale_iterations=self.stale_iterations)
-        self._reuse_outcome(res)
+        x0 = None if self._following is None else self._follow()
+        if x0 is not None:
+            # the path's factors are of the matrix at the recorded solution: a slow
+            # contraction is the Newton matrix's own approximation, which refactoring at
+            # the iterate would not improve
+            res = newton(self._residual, self._jacobian, x0, self._error,
+                         self.tol * self.scale, self.lin, not self._full, full=self._full,
+                         estimate=self.tol >= ESTIMATE_TOL and not self._confirm,
+                         stale_rate=TURNED_STALE_RATE,
+                         stale_iterations=TURNED_STALE_ITERATIONS)
+        else:
+            if self._recording is not None:
+                self._recorded_start = self._start()
+            res = newton(self._residual, self._jacobian, self._predict(), self._error,
+                         self.tol * self.scale, self.lin, self._reuse_now(), full=self._full,
+                         estimate=self.tol >= ESTIMATE_TOL and not self._confirm,
+                         stale_rate=self.stale_rate,
+                         stale_iterations=self.stale_iterations)
+            self._reuse_outcome(res)
         if not res.converged:
             return StepInfo(False, res.iterations, res.factorizations,
                             res.message + self._culprit(res))
+        if x0 is not None:
+            d = res.x - self._following.x[self._path_step]
+            self._path_hist = (*self._path_hist[-2:], d)
+            self._path_step += 1
+        elif self._recording is not None:
+            self._record(res.x)
         self._finish(res.x)
         self._history(res.x)
         return StepInfo(True, res.iterations, res.factorizations)

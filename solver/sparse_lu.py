@@ -440,6 +440,13 @@ class RefactorLU:
         orders.insert(0, an)
         del orders[_ORDERS_KEPT:]
 
+    @property
+    def nbytes(self) -> int:
+        """Memory the factors hold (L's and U's entries and row indices, U's diagonal)."""
+        if self._an is None:
+            return 0
+        return sum(a.nbytes for a in (*self._l, *self._u, self.diagonal))
+
     def solve(self, b: Array) -> Array:
         """x with A x = b for the last factored A; b of shape (n,) or (n, k)."""
         an = self._an

@@ -26,6 +26,7 @@ remaining rotation (3 + 2 + 1 in-plane unknowns, 2 rolling relations: one degree
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -263,9 +264,9 @@ def pin_angle(system, parts: BifilarParts, hub, q: np.ndarray) -> float:
     relative to the vertex tangent, in the hub frame (for circular holes: the pin angle φ)."""
     rh = system.directors(q, hub)
     t = rh.T @ system.directors(q, parts.link1)[:, 0]
-    qa = rotation_about(Z, parts.angle)
-    t = qa.T @ t
-    return float(np.arctan2(-t[0], t[1]))
+    # turned back by the bifilar's angle about the hub's axis z (a sampler asks at every step)
+    c, s = math.cos(parts.angle), math.sin(parts.angle)
+    return math.atan2(-(c * t[0] + s * t[1]), c * t[1] - s * t[0])
 
 
 def build(p: Parameters, holes: Holes | None = None):
