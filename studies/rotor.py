@@ -213,6 +213,11 @@ ESTIMATE_RATIO = 4 / 3
 ESTIMATE_ACCURACY = 0.1
 ESTIMATE_USABLE = 0.5
 ESTIMATE_ITERATES = 24
+# Settling's wake updates compute the wake at every SETTLE_WAKE_STRIDE-th azimuth of the
+# revolution only, interpolated between (RotorWake.update): their tables only bring the
+# wake near its fixed point for the accelerated updates on the periodic responses, which
+# compute it at every azimuth and replace them.
+SETTLE_WAKE_STRIDE = 4
 # The periodicity tolerance of the periodic responses that the prescribed wake's and the
 # trim's iterations update from (the last one is found to the case's periodic_tolerance):
 # with the wake, shooting's extrapolations leave about 1e-3 unexplained (the free case's pins
@@ -1044,7 +1049,8 @@ def _settle(p: Parameters, d: RotorDesign, h: float, wake: RotorWake | None,
         if wake is not None:
             if controls is not None:  # the wake laid out for the shaft tilt flown
                 wake.shaft_tilt = controls.shaft_tilt
-            report(f"wake update {wake.updates + 1}: change {wake.update():.3g}")
+            report(f"wake update {wake.updates + 1}: change "
+                   f"{wake.update(stride=SETTLE_WAKE_STRIDE):.3g}")
         state = integ.state()
         steps += integ.n_steps
         iterations += integ.n_iterations
@@ -1561,6 +1567,6 @@ def _check(p: Parameters) -> Parameters | None:
 SPEC = ModelSpec("rotor", PARAMETERS, simulate, _check,
                  description="four-bladed elastic UH-60 rotor with aerodynamics and four "
                              "bifilars on a fuselage-beam",
-                 outputs=OUTPUTS, version="14",
+                 outputs=OUTPUTS, version="15",
                  # the two parts take about as long to compile (curve joints / the rest)
                  warm_up=(partial(compile_bifilar, "galpha"), compile_kernels))

@@ -183,12 +183,24 @@ class RotorWake:
         return self.p.wake_core_radius * UH60A.chord
 
     def _velocities(self, points: Array, gamma: Array, tip: Array, root: Array,
-                    ct: float) -> Array:
+                    ct: float, stride: int = 1) -> Array:
+        """The wake's velocity at blade 0's sections at each azimuth slot; with ``stride``,
+        computed at every stride-th slot only and interpolated linearly in azimuth between
+        (a stride-th of the cost)."""
+        n = len(points)
+        every = slice(None, None, stride)
+        points, gamma, tip, root = points[every], gamma[every], tip[every], root[every]
         bound = np.stack([root, tip], axis=1)
         i, f = self._sub  # the subsections, extrapolated linearly beyond the end sections
         sub = (1.0 - f)[None, :, None] * points[:, i - 1] + f[None, :, None] * points[:, i]
         v = self.wake(ct).blade_velocities(sub, gamma, tip, bound, self.core)
-        return v.reshape(len(points), -1, SUBSECTIONS, 3).mean(axis=2)
+        v = v.reshape(len(points), -1, SUBSECTIONS, 3).mean(axis=2)
+        if stride == 1:
+            return v
+        x = np.arange(n) / stride
+        j = np.floor(x).astype(np.int64)
+        w = (x - j)[:, None, None]
+        return (1.0 - w) * v[j] + w * v[(j + 1) % len(v)]
 
     def record(self, t: float, air: dict[str, Array], wind: Array, tip: Array,
                thrust: float) -> None:
@@ -248,7 +260,7 @@ class RotorWake:
         six updates)."""
         self.history.clear()
 
-    def update(self, accelerate: bool = False) -> float:
+    def update(self, accelerate: bool = False, stride: int = 1) -> float:
         """Recompute the wake from blade 0's last revolution and move the table towards it;
         returns the change (relative to the table's largest value) before the move.
 
@@ -257,12 +269,19 @@ class RotorWake:
         49, 2011): the residual's least-squares combination of the previous ones, which
         removes the slow directions of the fixed-point map that relaxation alone crawls
         along (one with a factor near 0.7 per update on the UH-60 case). Iterates taken
-        without it (settling, where the response is not yet periodic) are not remembered."""
+        without it (settling, where the response is not yet periodic) are not remembered.
+
+        With ``stride`` the wake's velocity is computed at every stride-th azimuth slot only
+        (the largest divisor of it that keeps the blades on the coarser grid) and
+        interpolated linearly between: a stride-th of the cost, for settling's updates,
+        whose tables the later ones replace."""
         if not self.filled.all():
             raise RuntimeError("rotor wake: a whole revolution must be recorded before an "
                                "update")
+        stride = max(k for k in range(1, max(1, int(stride)) + 1)
+                     if self.n % (k * self.blades) == 0)
         new = (self._velocities(self.points, self.gamma, self.tip, self.root,
-                                self.thrust_coefficient) - self.inflow)
+                                self.thrust_coefficient, stride) - self.inflow)
         scale = max(float(np.abs(new).max()), 1e-12)
         x, f = self.table.ravel().copy(), (new - self.table).ravel()
         self.change = float(np.abs(f).max()) / scale

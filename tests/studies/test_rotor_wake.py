@@ -7,7 +7,8 @@ import pytest
 
 from solver.inflow import glauert_inflow
 from studies import rotor
-from studies.rotor_wake import anderson_step
+from studies.rotor_wake import RotorWake, anderson_step
+from studies.uh60a import UH60A
 
 # measured: 4.0e-4 (a last update of 1.5e-3, relaxed by half, then Anderson's step)
 FIXED_POINT = 2e-3
@@ -40,6 +41,30 @@ def test_anderson_solves_a_linear_fixed_point_as_gmres_does():
     relaxed = _iterate(a, b, 0.5, 0, 30)
     assert relaxed[-1] > 0.1  # (1 − 0.5 · 0.05)^30 = 0.47 of the slow part left
     assert relaxed[-1] / relaxed[-2] == pytest.approx(0.975, abs=2e-3)
+
+
+def test_a_wake_on_every_fourth_azimuth_is_near_the_whole_one():
+    # settling's updates (studies.rotor.SETTLE_WAKE_STRIDE): blade 0 turning rigidly with a
+    # 1P flapping and circulation, its wake computed at 60 of the 240 azimuths and
+    # interpolated between, against all 240. Measured: within 1.1 % of the velocity's
+    # largest value at every second azimuth, 4.1 % at every fourth (the vortices passing the
+    # sections between the computed azimuths, and the circulation and release points sampled
+    # as coarsely)
+    p = rotor.SPEC.validate({})
+    span = np.linspace(0.2, 0.97, 18) * UH60A.radius
+    wake = RotorWake(p, span, np.gradient(span), 4)
+    for j, psi in enumerate(2 * np.pi * np.arange(wake.n) / wake.n):
+        turn = np.array([np.cos(psi), np.sin(psi), 0.0])
+        wake.points[j] = span[:, None] * turn + [0.0, 0.0, 0.1 * np.sin(psi)]
+        wake.gamma[j] = 40.0 * (1 + 0.3 * np.sin(psi))
+        wake.tip[j] = p.wake_release_radius * UH60A.radius * turn
+        wake.root[j] = wake.points[j, 0]
+    wake.thrust[:] = 7e4
+    args = (wake.points, wake.gamma, wake.tip, wake.root, wake.thrust_coefficient)
+    whole = wake._velocities(*args)
+    scale = np.abs(whole).max()
+    for stride, error in ((2, 0.015), (4, 0.06)):
+        assert np.abs(wake._velocities(*args, stride) - whole).max() < error * scale
 
 
 @pytest.mark.slow
