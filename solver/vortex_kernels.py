@@ -36,35 +36,48 @@ def segment_velocities(points, starts, ends, circulation, core, out):  # pragma:
 
     ``starts``, ``ends`` (m, 3), ``circulation`` (m,) (m²/s), ``core`` (m,) Vatistas core
     radii r_c (m; 0 for a potential segment).
+
+    With c = r1 × r2 (|c| = |r0| h) the velocity is
+    Γ/(4π) · r0·(r1/|r1| − r2/|r2|) · c / (|r0|² √(h⁴ + r_c⁴)) (the potential's h² for
+    √(h⁴ + r_c⁴) when r_c = 0): the segment's own constants (r0, |r0|², Γ/4π, r_c⁴) are
+    found once, and a pair costs three square roots and three divisions.
     """
     n = points.shape[0]
     m = starts.shape[0]
+    seg = np.empty((m, 7))  # r0, |r0|², Γ/(4π), r_c⁴
+    for k in range(m):
+        r0x = ends[k, 0] - starts[k, 0]
+        r0y = ends[k, 1] - starts[k, 1]
+        r0z = ends[k, 2] - starts[k, 2]
+        seg[k, 0], seg[k, 1], seg[k, 2] = r0x, r0y, r0z
+        seg[k, 3] = r0x * r0x + r0y * r0y + r0z * r0z
+        seg[k, 4] = circulation[k] / FOUR_PI
+        seg[k, 5] = core[k] ** 4
+        seg[k, 6] = COINCIDENCE * COINCIDENCE * seg[k, 3]  # (the coincidence distance)²
     for i in range(n):
         px, py, pz = points[i, 0], points[i, 1], points[i, 2]
         vx = vy = vz = 0.0
         for k in range(m):
-            ax, ay, az = starts[k, 0], starts[k, 1], starts[k, 2]
-            bx, by, bz = ends[k, 0], ends[k, 1], ends[k, 2]
-            r0x, r0y, r0z = bx - ax, by - ay, bz - az
-            r1x, r1y, r1z = px - ax, py - ay, pz - az
-            r2x, r2y, r2z = px - bx, py - by, pz - bz
-            l0 = math.sqrt(r0x * r0x + r0y * r0y + r0z * r0z)
-            l1 = math.sqrt(r1x * r1x + r1y * r1y + r1z * r1z)
-            l2 = math.sqrt(r2x * r2x + r2y * r2y + r2z * r2z)
+            l0sq = seg[k, 3]
+            tiny = seg[k, 6]
+            r1x, r1y, r1z = px - starts[k, 0], py - starts[k, 1], pz - starts[k, 2]
+            r2x, r2y, r2z = px - ends[k, 0], py - ends[k, 1], pz - ends[k, 2]
+            s1 = r1x * r1x + r1y * r1y + r1z * r1z
+            s2 = r2x * r2x + r2y * r2y + r2z * r2z
             cx = r1y * r2z - r1z * r2y
             cy = r1z * r2x - r1x * r2z
             cz = r1x * r2y - r1y * r2x
-            cross = math.sqrt(cx * cx + cy * cy + cz * cz)  # |r0| h
-            tiny = COINCIDENCE * l0
-            if l0 == 0.0 or l1 <= tiny or l2 <= tiny or cross <= tiny * l0:
+            csq = cx * cx + cy * cy + cz * cz  # |r0|² h²
+            if l0sq == 0.0 or s1 <= tiny or s2 <= tiny or csq <= tiny * l0sq:
                 continue
-            h = cross / l0
-            cos_diff = (r0x * (r1x / l1 - r2x / l2) + r0y * (r1y / l1 - r2y / l2)
-                        + r0z * (r1z / l1 - r2z / l2)) / l0
-            rc = core[k]
-            # the potential 1/h, or the Vatistas (n = 2) h / √(h⁴ + r_c⁴)
-            profile = 1.0 / h if rc == 0.0 else h / math.sqrt(h**4 + rc**4)
-            scale = circulation[k] / FOUR_PI * cos_diff * profile / cross
+            i1 = 1.0 / math.sqrt(s1)
+            i2 = 1.0 / math.sqrt(s2)
+            dot = (seg[k, 0] * (r1x * i1 - r2x * i2) + seg[k, 1] * (r1y * i1 - r2y * i2)
+                   + seg[k, 2] * (r1z * i1 - r2z * i2))
+            hsq = csq / l0sq
+            # the potential 1/h over |c|, or the Vatistas (n = 2) h / √(h⁴ + r_c⁴) over |c|
+            root = hsq if seg[k, 5] == 0.0 else math.sqrt(hsq * hsq + seg[k, 5])
+            scale = seg[k, 4] * dot / (l0sq * root)
             vx += scale * cx
             vy += scale * cy
             vz += scale * cz
