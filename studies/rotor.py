@@ -328,7 +328,7 @@ PARAMETERS: dict[str, Param] = {
                                 exclusive_minimum=True, maximum=1.0),
     "floquet": Param(True, "1", "compute the periodic response's largest Floquet "
                      "multiplier (floquet_multiplier_max): Arnoldi on the quarter-revolution "
-                     "map, 25-64 perturbed quarter revolutions (6-16 s a case); with the "
+                     "map, 25-64 perturbed quarter revolutions (3-9 s a case); with the "
                      "prescribed wake, in the converged wake held fixed"),
     **periodic.STEP_ERROR_PARAMETERS,
     **periodic.PARAMETERS,
