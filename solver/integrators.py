@@ -74,7 +74,7 @@ PROJECTION_MAXITER = 50  # Iterations allowed for the initial projection onto C(
 TURNED_STALE_RATE = 0.2
 TURNED_STALE_ITERATIONS = 8
 # The most memory a recorded Newton path's factors may hold (NewtonPath): the rotor's
-# quarter-revolution map keeps 60 factors of 3.1 MB each; a longer march keeps factors for its
+# quarter-revolution map keeps 60 factors of 2.4 MB each; a longer march keeps factors for its
 # first steps only, and its later steps solve with their own
 PATH_BYTES = 1e9
 
@@ -482,28 +482,26 @@ class Integrator:
             self.lin.angle = self.turning.rate * (self.t + self.h)
             self.lin.stages = self._nk // self.sys.n
         x0 = None if self._following is None else self._follow()
-        if x0 is not None:
-            # the path's factors are of the matrix at the recorded solution: a slow
-            # contraction is the Newton matrix's own approximation, which refactoring at
-            # the iterate would not improve
-            res = newton(self._residual, self._jacobian, x0, self._error,
-                         self.tol * self.scale, self.lin, not self._full, full=self._full,
-                         estimate=self.tol >= ESTIMATE_TOL and not self._confirm,
-                         stale_rate=TURNED_STALE_RATE,
-                         stale_iterations=TURNED_STALE_ITERATIONS)
-        else:
+        following = x0 is not None
+        if not following:
             if self._recording is not None:
                 self._recorded_start = self._start()
-            res = newton(self._residual, self._jacobian, self._predict(), self._error,
-                         self.tol * self.scale, self.lin, self._reuse_now(), full=self._full,
-                         estimate=self.tol >= ESTIMATE_TOL and not self._confirm,
-                         stale_rate=self.stale_rate,
-                         stale_iterations=self.stale_iterations)
+            x0 = self._predict()
+        # a followed path's factors are of the matrix at the recorded solution: a slow
+        # contraction is the Newton matrix's own approximation, which refactoring at the
+        # iterate would not improve, so they are kept as long as turned factors are
+        res = newton(self._residual, self._jacobian, x0, self._error, self.tol * self.scale,
+                     self.lin, not self._full if following else self._reuse_now(),
+                     full=self._full, estimate=self.tol >= ESTIMATE_TOL and not self._confirm,
+                     stale_rate=TURNED_STALE_RATE if following else self.stale_rate,
+                     stale_iterations=(TURNED_STALE_ITERATIONS if following
+                                       else self.stale_iterations))
+        if not following:
             self._reuse_outcome(res)
         if not res.converged:
             return StepInfo(False, res.iterations, res.factorizations,
                             res.message + self._culprit(res))
-        if x0 is not None:
+        if following:
             d = res.x - self._following.x[self._path_step]
             self._path_hist = (*self._path_hist[-2:], d)
             self._path_step += 1
