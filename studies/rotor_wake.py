@@ -27,7 +27,9 @@ spike that quadrature points would sample, not integrate.
 The iteration. The first settling revolution runs on Peters–He alone; after each settling
 revolution the table is updated from blade 0's last revolution (its sections' positions, its
 tip, its circulation and the Peters–He inflow at every time step) with under-relaxation
-``wake_relaxation``; then the run alternates shooting to the periodic response for the current
+``wake_relaxation``, the wake computed at every fourth azimuth and interpolated between
+(:meth:`RotorWake.update`'s ``stride``: those tables only bring the wake near its fixed
+point); then the run alternates shooting to the periodic response for the current
 table and updating it (Anderson-accelerated: :func:`anderson_step`), until the update changes
 the table by less than ``wake_tolerance`` of its largest value. Each of those periodic
 responses is found only as closely as the table it answers is known: to the last update's
