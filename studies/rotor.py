@@ -75,9 +75,10 @@ each Krylov vector, and the periodic responses found after it restart by Newtonâ
 map's slow modes (:class:`solver.period_map.SlowSubspace`) instead of the extrapolation. With
 the wake or a trim the multipliers are found on the response their iterations end on (to
 ``OUTER_TOLERANCE``), before the last one (to ``periodic_tolerance``), which then restarts
-so, as the wake error estimate's does. The responses between the wake's updates end at the
-first extrapolated restart within their tolerance (:func:`studies.periodic.shoot`'s
-``trust_estimate``): the next update needs them no closer, and only the last is recorded.
+so, as the wake error estimate's does. The responses between the wake's updates and after
+the trim's control changes end at the first extrapolated restart within their tolerance
+(:func:`studies.periodic.shoot`'s ``trust_estimate``): the next update or correction needs
+them no closer, and only the last is recorded.
 
 ``docs/models.md`` gives the assumptions, the defaults and the measured accuracy.
 """
