@@ -378,7 +378,7 @@ class Integrator:
         else:
             d = _extrapolate(hist[0], hist[-2], hist[-1], self._nk, len(hist) == 3)
         if path.lu[k] is not None and not self._full:
-            self.lin.lu, self.lin._angle_lu = path.lu[k], path.angle[k]
+            self.lin.use(path.lu[k], path.angle[k])
         return path.x[k] + d
 
     @contextmanager

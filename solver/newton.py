@@ -87,6 +87,11 @@ class LinearSolver:
         self._angle_lu = self.angle
         return None
 
+    def use(self, lu: RefactorLU, angle: float) -> None:
+        """Keep factors made elsewhere (of a matrix at spin ``angle``, rad), as if factored
+        here: a recorded Newton path's (:class:`solver.integrators.NewtonPath`)."""
+        self.lu, self._angle_lu = lu, angle
+
     def solve(self, b: NDArray) -> NDArray:
         """x with J x = b for the current matrix J, by the kept factors (turned, if they were
         factored at another spin angle)."""

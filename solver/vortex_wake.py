@@ -215,10 +215,11 @@ class TipVortexWake:
 
 
 def periodic_interp(angle: ArrayLike, samples: Array) -> Array:
-    """Samples of a 2π-periodic function at 2πj/n, interpolated linearly at ``angle`` (rad)."""
+    """Samples of a 2π-periodic function at 2πj/n (along the first axis of ``samples``, the
+    others carried along), interpolated linearly at ``angle`` (rad)."""
     n = len(samples)
     x = np.mod(np.asarray(angle, dtype=float) / (2.0 * math.pi), 1.0) * n
     j = np.floor(x).astype(np.int64)
-    f = x - j
+    f = (x - j).reshape(x.shape + (1,) * (np.ndim(samples) - 1))
     j %= n
     return (1.0 - f) * samples[j] + f * samples[(j + 1) % n]

@@ -57,7 +57,7 @@ from numpy.typing import NDArray
 
 from solver.inflow import glauert_inflow
 from solver.section_wind import PeriodicWind
-from solver.vortex_wake import DESCENT_LAWS, TipVortexWake
+from solver.vortex_wake import DESCENT_LAWS, TipVortexWake, periodic_interp
 from studies.parameters import Param, Parameters
 from studies.uh60a import UH60A
 
@@ -199,10 +199,7 @@ class RotorWake:
         v = v.reshape(len(points), -1, SUBSECTIONS, 3).mean(axis=2)
         if stride == 1:
             return v
-        x = np.arange(n) / stride
-        j = np.floor(x).astype(np.int64)
-        w = (x - j)[:, None, None]
-        return (1.0 - w) * v[j] + w * v[(j + 1) % len(v)]
+        return periodic_interp(2.0 * math.pi * np.arange(n) / n, v)
 
     def record(self, t: float, air: dict[str, Array], wind: Array, tip: Array,
                thrust: float) -> None:
