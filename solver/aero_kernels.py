@@ -197,15 +197,21 @@ def airloads(x, xd, xa, mu, al, phi, wts, props, rho, air, omega_r, load_scale, 
 
 @njit(cache=True)
 def local_jacobian(x, xd, xa, mu, al, phi, wts, phi_p, wts_p, props, rho, air, omega_r,
-                   load_scale, u_floor2, kappa, pb, ainv_c, h, jac):
+                   load_scale, u_floor2, kappa, pb, ainv_c, h, wq, wv, wa, combined, jac):
     """∂(g, rates, forcing)/∂(x, μ, α, ẋ, ẍ) of every section by complex steps i h of
     :func:`section_loads`, one input at a time; the inflow states α enter only through the
     section's λ = Φ·α, so one step along Φ/(Φ·Φ) gives ∂/∂λ, and column j is ∂/∂λ Φ_j.
 
-    ``phi_p``, ``wts_p`` (3, K, n_i, complex) are Φ and W at the positions perturbed by i h
-    along x, y, z (the only inputs they depend on); ``air`` (K, 3) the air's velocity at
-    each section, as in :func:`airloads`. ``jac`` (K, 12 + N + n_i, 36 + N + n_i)
-    receives the derivatives, columns in the order x (12), μ (N), α (n_i), ẋ (12), ẍ (12).
+    ``phi_p``, ``wts_p`` (3, K, n_i, complex) are Φ and W at the positions perturbed by
+    i h wq along x, y, z (the only inputs they depend on); ``air`` (K, 3) the air's velocity
+    at each section, as in :func:`airloads`. Without ``combined`` (and with ``wq`` = 1),
+    ``jac`` (K, 12 + N + n_i, 36 + N + n_i) receives the derivatives, columns in the order
+    x (12), μ (N), α (n_i), ẋ (12), ẍ (12). With ``combined`` it receives the Newton
+    matrix's weighted sum (K, 12 + N + n_i, 12 + N + n_i): wq ∂/∂x + wv[k] ∂/∂ẋ + wa ∂/∂ẍ
+    by the 12 coordinates, then wq ∂/∂μ and wq ∂/∂α. One complex step then moves a
+    coordinate by i h wq, its rate by i h wv[k] and its acceleration by i h wa together (the
+    derivative along that direction is the weighted sum): 12 + N + 1 evaluations a section
+    instead of 36 + N + 1.
     """
     n, ni = mu.shape[1], al.shape[1]
     m = 12 + n + ni
@@ -231,11 +237,11 @@ def local_jacobian(x, xd, xa, mu, al, phi, wts, phi_p, wts_p, props, rho, air, o
         for i in range(ni):
             pp += phi[k, i] * phi[k, i]
         col = 0
-        for block in range(5):
+        for block in range(3 if combined else 5):
             if block == 2:  # α: one step of λ (no column if Φ = 0 here: λ takes no α)
                 if pp > 0.0:
                     for i in range(ni):
-                        cal[i] = al[k, i] + step * (phi[k, i] / pp)
+                        cal[i] = al[k, i] + (step * wq) * (phi[k, i] / pp)
                     section_loads(cx, cxd, cxa, cmu, cal, cph, cwt, props[k], rho, air[k],
                                   omega_r, load_scale, u_floor2, kappa, pb, ainv_c, wk,
                                   out[:12], out[12 : 12 + n], out[12 + n :], det)
@@ -251,7 +257,10 @@ def local_jacobian(x, xd, xa, mu, al, phi, wts, phi_p, wts_p, props, rho, air, o
             arr = cx if block == 0 else (cmu if block == 1 else (cxd if block == 3 else cxa))
             for c in range(size):
                 base = arr[c]
-                arr[c] = base + step
+                arr[c] = base + step * (wq if block < 3 else 1.0)
+                if combined and block == 0:  # the rate and the acceleration move with it
+                    cxd[c] = xd[k, c] + step * wv[k]
+                    cxa[c] = xa[k, c] + step * wa
                 if block == 0 and c < 3:  # a position step moves the inflow shapes
                     ph, wt = phi_p[c, k], wts_p[c, k]
                 else:
@@ -260,6 +269,8 @@ def local_jacobian(x, xd, xa, mu, al, phi, wts, phi_p, wts_p, props, rho, air, o
                               load_scale, u_floor2, kappa, pb, ainv_c, wk, out[:12],
                               out[12 : 12 + n], out[12 + n :], det)
                 arr[c] = base
+                if combined and block == 0:
+                    cxd[c], cxa[c] = xd[k, c], xa[k, c]
                 for i in range(m):
                     jac[k, i, col] = out[i].imag / h
                 col += 1

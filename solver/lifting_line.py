@@ -60,6 +60,9 @@ the ``airloads`` details, from the same call) and on complex numbers; its deriva
 local input (12 coordinates, 12 rates, 12 accelerations, the section's states and the inflow
 states) come from complex steps, one input at a time in one compiled loop
 (:func:`~solver.aero_kernels.local_jacobian`) — exact to roundoff, from the one formula. The
+Newton matrix needs only their sum weighted by its scheme (∂/∂q + γ/(βh) ∂/∂q̇ + …): one
+complex step moves a coordinate, its rate and its acceleration together and gives that sum
+at a third of the evaluations (:meth:`LiftingLineSet.force_tangent`). The
 inflow shapes and load weights, which depend on the section's position only, are evaluated by
 the inflow model in NumPy at the real positions and at the three stepped ones, and passed in.
 """
@@ -429,18 +432,27 @@ class LiftingLineSet(ElementSet):
         key = (q.tobytes(), v.tobytes(), a.tobytes(), t if self.winds else None)
         if self._cache is not None and self._cache[0] == key:
             return self._cache[1]
+        jac = self._derivatives(q, v, a, t, 1.0, np.ones(self.K), 1.0, False)
+        self._cache = (key, jac)
+        return jac
+
+    def _derivatives(self, q, v, a, t, wq: float, wv: Array, wa: float, combined: bool):
+        """:func:`solver.aero_kernels.local_jacobian` at (q, v, a, t), steps weighted by
+        ``wq``, ``wv`` (per section) and ``wa``; all derivatives, or with ``combined`` their
+        weighted sum by the coordinates, rates and accelerations together."""
         x, xd, xa, mu, al = self._inputs(q, v, a)
         k, n, ni = self.K, self.n, self.n_i
         phi, wts = self._inflow_terms(x[:, 0:3])
-        # Φ and W at the positions stepped by i h along x, y, z: all the Jacobian needs of them
+        # Φ and W at the positions stepped by i h wq along x, y, z: all the Jacobian needs of
+        # them
         pos = np.repeat(x[None, :, 0:3].astype(complex), 3, axis=0)  # (3, K, 3)
         for c in range(3):
-            pos[c, :, c] += 1j * COMPLEX_STEP
+            pos[c, :, c] += 1j * (COMPLEX_STEP * wq)
         pp, wp = (z.reshape(3, k, ni) for z in self._inflow_terms(pos.reshape(3 * k, 3)))
-        jac = np.empty((k, 12 + n + ni, 36 + n + ni))  # (K, out, in)
+        jac = np.empty((k, 12 + n + ni, (12 if combined else 36) + n + ni))  # (K, out, in)
         aero_kernels.local_jacobian(x, xd, xa, mu, al, phi, wts, pp, wp, *self._constants(t),
-                                    COMPLEX_STEP, jac)
-        self._cache = (key, jac)
+                                    COMPLEX_STEP, float(wq), np.ascontiguousarray(wv, float),
+                                    float(wa), combined, jac)
         return jac
 
     def _expand(self, jac: Array, c0: int, nraw: int) -> Array:
@@ -465,16 +477,14 @@ class LiftingLineSet(ElementSet):
     def force_tangent(self, q, v, t, a, wq, wv, wa):
         # the section's 12 inputs are S times its support's coordinates, S times their rates
         # and S times their accelerations: with one velocity weight per section the three
-        # local Jacobians sum before the map to the 48 support columns, and ∂f/∂v, ∂f/∂a
-        # (inside the ∂f/∂q pattern) cost no global blocks of their own
+        # local Jacobians sum before the map to the 48 support columns (one complex step
+        # along the three at once), and ∂f/∂v, ∂f/∂a (inside the ∂f/∂q pattern) cost no
+        # global blocks of their own
         w48 = wv[self.idx48]
         wk = w48[:, 0]
         if not np.all(w48 == wk[:, None]):
             return None
-        jac = self._local_jacobian(q, v, a, t)
-        m = 12 + self.n + self.n_i  # columns by x, μ, α; then by ẋ (12) and ẍ (12)
-        tan = wq * jac[:, :, :m]
-        tan[:, :, :12] += wk[:, None, None] * jac[:, :, m : m + 12] + wa * jac[:, :, m + 12 :]
+        tan = self._derivatives(q, v, a, t, wq, wk, wa, True)
         return self._expand(tan, 0, self.n + self.n_i).ravel()
 
     # ------------------------------------------------------------------ outputs
