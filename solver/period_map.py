@@ -234,6 +234,12 @@ class SlowSubspace:
     observations rather than on the state because the state's own change over a map carries
     a floor the motion does not (the rates of fast first-order states, a scheme's history),
     whose projection on V_p, amplified by (I − H_p)⁻¹, would drive the iterates away.
+
+    ``rows`` keeps the probe's rows themselves for each vector (k, steps, columns: the
+    perturbed march's rows less the unperturbed one's, over the perturbation; column 0 the
+    unperturbed march's, the time), and ``t0`` the time the marches start at: with
+    :meth:`pairs`, what a march at another time step (:func:`studies.periodic.step_error`)
+    needs of the slow modes.
     """
 
     keys: list[str]
@@ -241,6 +247,22 @@ class SlowSubspace:
     basis: Array
     hessenberg: Array
     observed: Array
+    rows: Array | None = None
+    t0: float = 0.0
+
+    def pairs(self) -> tuple[Array, Array]:
+        """Secant pairs of the map's Jacobian J as the probe's rows see them: (C v_j, C J v_j)
+        for the first k − 1 Krylov vectors, each (k − 1, steps, columns) with the time in
+        column 0. Arnoldi's relation J V_{k−1} = V_k H_{k,k−1} makes the second exact from
+        the k marches: C J v_j = Σ_i h_ij C v_i."""
+        if self.rows is None or len(self.rows) < 2:
+            raise ValueError("SlowSubspace.pairs: the probe's rows of two vectors at least "
+                             "are needed")
+        k = len(self.rows)
+        u = self.rows[: k - 1].copy()
+        ju = np.tensordot(self.hessenberg[:k, : k - 1].T, self.rows, axes=1)
+        ju[:, :, 0] = u[:, :, 0]
+        return u, ju
 
     def correction(self, change: Array, scale: Array, rho: float = 0.5,
                    rcond: float = 1e-6) -> tuple[list[Array], float]:
@@ -402,6 +424,7 @@ def _arnoldi_on_map(integ, steps: int, keys: list[str], weight: Array, symmetry,
         return project_velocities(system, q, v, t0, metric)
 
     seen: list[Array] = []  # what the probe saw of each march, observed
+    rows_seen: list[Array] = []  # and its rows
     # the base march's Newton path (an integrator that records one:
     # solver.integrators.NewtonPath), which every march then follows: each step converges in
     # about two iterations on the path's factors, and to well within Newton's tolerance, the
@@ -428,7 +451,8 @@ def _arnoldi_on_map(integ, steps: int, keys: list[str], weight: Array, symmetry,
         if record:
             path = recorded
         if probe is not None:
-            block = np.array(rows)
+            block = np.array(rows, dtype=float)
+            rows_seen.append(block)
             seen.append(np.asarray(observe(block) if observe is not None else block,
                                    dtype=float))
         count += 1
@@ -455,6 +479,7 @@ def _arnoldi_on_map(integ, steps: int, keys: list[str], weight: Array, symmetry,
     if hasattr(integ, "recording"):
         integrate(start, record=True)
         seen.clear()
+        rows_seen.clear()
     raw = integrate(start)
     if pins.size:  # the pins' spin back to the input's, the same turn for every output
         align = spin_alignment(pins, start[0], raw[0])
@@ -485,9 +510,12 @@ def _arnoldi_on_map(integ, steps: int, keys: list[str], weight: Array, symmetry,
     subspace = None
     if probe is not None:
         # seen[0] is the base march, seen[1 + j] the march from Krylov vector j
-        base_seen = seen[0]
-        cols = [((o - base_seen) / eps).ravel() for o in seen[1 : 1 + basis.shape[1]]]
-        subspace = SlowSubspace(keys, weight, basis, hess, np.column_stack(cols))
+        base_seen, base_rows = seen[0], rows_seen[0]
+        k = basis.shape[1]
+        cols = [((o - base_seen) / eps).ravel() for o in seen[1 : 1 + k]]
+        rows = np.array([(r - base_rows) / eps for r in rows_seen[1 : 1 + k]])
+        rows[:, :, 0] = base_rows[:, 0]
+        subspace = SlowSubspace(keys, weight, basis, hess, np.column_stack(cols), rows, t0)
     # the largest pair checked by a fresh application of the map: Arnoldi's residual estimate
     # holds for an exactly linear operator only, and a map whose finite differences carry
     # noise (a Newton stopped at its roundoff floor) can show tiny estimates for a wrong Ritz

@@ -347,6 +347,44 @@ def test_sector_response_with_the_slow_modes_known_from_other_iterates():
                         reference=fine, omega=OMEGA, history=[[h[::2] for h in history]])
 
 
+def test_sector_response_with_the_maps_jacobian_known_as_pairs():
+    """Given the map's Jacobian as secant pairs of blocks (U, JU): each of the ring's eight
+    state directions perturbed, the first block's change and the next one's (what the
+    multipliers' Arnoldi run gives, :meth:`solver.period_map.SlowSubspace.pairs`), the
+    secant step finds the periodic response in four iterates (the least it checks), exact to
+    roundoff (measured 3.1e-15 of the change), with no other start's iterates; pairs
+    of the wrong shape are refused."""
+    n = 24
+    z_fine, fine = _Ring(2 * n, np.zeros(4)).periodic(2 * n)
+    _, exact = _Ring(n, np.zeros(4)).periodic(n)
+    change = np.abs(rev_harmonics(exact[:, 1:]) - rev_harmonics(fine[1::2, 1:])).max()
+    align = _aligner(4)
+
+    def blocks(z0: np.ndarray) -> list[np.ndarray]:  # two sectors' aligned blocks from z0
+        ring, out = _Ring(n, z0), []
+        for j in (1, 2):
+            rows = []
+            for _ in range(n // 4):
+                ring.step()
+                rows.append(ring.sample())
+            out.append(align(np.array(rows), j))
+        return out
+
+    base = blocks(np.zeros(4))
+    directions = [*np.eye(4), *(1j * np.eye(4))]
+    u = np.array([blocks(d)[0] - base[0] for d in directions])
+    ju = np.array([blocks(d)[1] - base[1] for d in directions])
+    ring = _Ring(n, z_fine)
+    rev, uncertainty, iterates = sector_response(
+        ring, ring.sample, align, n_sectors=4, steps_per_rev=n, reference=fine, omega=OMEGA,
+        accuracy=1e-8, min_iterates=4, pairs=(u, ju))
+    err = np.abs(rev_harmonics(rev[:, 1:]) - rev_harmonics(exact[:, 1:])).max()
+    assert iterates == 4 and uncertainty <= 1e-8 and err < 1e-12 * change, (iterates, err)
+    with pytest.raises(ValueError, match="pairs must be two arrays of blocks of 6 samples"):
+        sector_response(_Ring(n, z_fine), ring.sample, align, n_sectors=4, steps_per_rev=n,
+                        reference=fine, omega=OMEGA, pairs=(u[:, ::2], ju[:, ::2]))
+
+
 def test_secant_pairs_of_another_map_leave_the_change_unexplained():
     """The quantity sector_response's guard reads: secant pairs from iterates of the same map
     (another start) explain this run's first change (unexplained part 3e-14); pairs from
