@@ -1147,6 +1147,14 @@ def resample(block: Array, m: int) -> Array:
     return out
 
 
+def aligned_pairs(pairs: tuple[Array, Array, int], align: Callable[[Array, int], Array],
+                  m: int) -> tuple[Array, Array]:
+    """Secant pairs (U, JU, j) of blocks of samples as sampled, ending j sector periods after
+    t = 0, as :func:`sector_response` takes them: aligned (``align``) and at m samples a
+    sector (:func:`resample`)."""
+    return tuple(np.array([resample(align(b, pairs[2]), m) for b in z]) for z in pairs[:2])
+
+
 def step_error(rec: PeriodicRecord, state: dict, coarse: Callable[[int], object],
                sampler: Callable[[object], Callable[[], Array]],
                align: Callable[[Array, int], Array], *, n_sectors: int, steps_per_rev: int,
@@ -1185,9 +1193,7 @@ def step_error(rec: PeriodicRecord, state: dict, coarse: Callable[[int], object]
     # the shooting iterates at the coarse step's sample times
     history = [[resample(align(b, j), n_c // n_sectors) for b, j in run]
                for run in rec.iterates]
-    known = None if pairs is None else tuple(
-        np.array([resample(align(b, pairs[2]), n_c // n_sectors) for b in z])
-        for z in pairs[:2])
+    known = None if pairs is None else aligned_pairs(pairs, align, n_c // n_sectors)
     result = StepError(rec.samples, integrator=integ, steps_per_rev=n_c)
     try:
         rev, uncertainty, _ = sector_response(

@@ -75,7 +75,10 @@ each Krylov vector, and the periodic responses found after it restart by Newton�
 map's slow modes (:class:`solver.period_map.SlowSubspace`) instead of the extrapolation. With
 the wake or a trim the multipliers are found on the response their iterations end on (to
 ``OUTER_TOLERANCE``), before the last one (to ``periodic_tolerance``), which then restarts
-so, as the wake error estimate's does. The responses between the wake's updates and after
+so; the step-error and wake error estimates' responses (at the coarser step, with the
+refined wake) are extrapolated from their iterates with the Krylov vectors' responses as
+secant pairs (:func:`studies.periodic.sector_response`'s ``pairs``), not marched. The
+responses between the wake's updates and after
 the trim's control changes end at the first extrapolated restart within their tolerance
 (:func:`studies.periodic.shoot`'s ``trust_estimate``): the next update or correction needs
 them no closer, and only the last is recorded.
@@ -1260,10 +1263,11 @@ def simulate(p: Parameters) -> xr.Dataset:
 
     # With a last periodic response to come (after the wake's or the trim's iterations) on the
     # quarter-revolution map, the multipliers are found first, on the response those ended on,
-    # and that response and the wake error estimate's restart by Newton–Picard alone from
-    # them: the response to 1e-3 the extrapolation stalls on (its restarts land at 1.2–2e-3),
-    # 5.5 revolutions where marching takes 15 on Table 1's case 1. The two responses differ
-    # within the outer tolerance, which moves the largest multiplier by less than
+    # and that response restarts by Newton–Picard alone from them (the estimates' responses
+    # take their Krylov vectors as secant pairs, below): the response to 1e-3 the
+    # extrapolation stalls on (its restarts land at 1.2–2e-3), 5.5 revolutions where
+    # marching takes 15 on Table 1's case 1. The two responses differ within the outer
+    # tolerance, which moves the largest multiplier by less than
     # FLOQUET_ACCURACY (Table 1: by 7e-5 at most, 0.91442 on case 1 against 0.91440 on its
     # last response). Not on the one-revolution map of a modal airframe, whose Newton–Picard
     # restarts can miss (the airframe study's locked case: the first grew the change from
@@ -1312,12 +1316,29 @@ def simulate(p: Parameters) -> xr.Dataset:
         # with the wake refined (twice the segments per turn and twice the turns), against
         # the recorded one
         wake.refine()
+        uncertainty = 0.0
         try:
-            finer = periodic_response()
+            if slow is not None and picard:
+                # the refined wake changes the forcing, not the map's Jacobian: the
+                # multipliers' Krylov vectors are the iterates' secant pairs, as for the
+                # step-error estimate, and the response is extrapolated, not marched
+                finer, uncertainty, iterates = periodic.sector_response(
+                    integ, lambda: sampler(integ), align, n_sectors=N_BLADES,
+                    steps_per_rev=nrev, reference=rec.samples, omega=omega,
+                    accuracy=ESTIMATE_ACCURACY, max_iterates=ESTIMATE_ITERATES,
+                    pairs=periodic.aligned_pairs((*slow.pairs(), round(slow.t0 / sector) + 1),
+                                                 align, nrev // N_BLADES))
+            else:
+                finer, iterates = periodic_response().samples, None
         except RuntimeError as exc:
             wake_note = f"no wake error estimate: {exc}"
         else:
-            wake_error = vibratory_change(rec.samples, finer.samples, nrev)
+            wake_error = vibratory_change(rec.samples, finer, nrev)
+            if iterates is not None:
+                report(f"wake error estimate {wake_error:.3g} ({iterates / N_BLADES:.2f} "
+                       f"revolutions extrapolated)")
+            if uncertainty > ESTIMATE_ACCURACY:
+                wake_note = f"wake error estimate uncertain by {uncertainty:.0%}"
     for i in [*done, integ]:
         steps += i.n_steps
         iterations += i.n_iterations
