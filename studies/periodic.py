@@ -939,12 +939,13 @@ def sector_response(integ, sample: Callable[[], Array], align: Callable[[Array, 
     0.35–0.39 unexplained, and the estimate 2.1e-3 against the 5.5e-3 measured; from the
     linear start 0.017–0.08, and 4.6e-3.)
 
-    ``pairs`` adds secant pairs known otherwise (:func:`secant_step`): the map's Jacobian at
-    the other step as the multipliers' Arnoldi run saw it
+    ``pairs`` adds secant pairs known otherwise (:func:`secant_step`): the map's Jacobian (at
+    the other step, or with the other forcing) as the multipliers' Arnoldi run saw it
     (:meth:`solver.period_map.SlowSubspace.pairs`), each Krylov vector's response a clean
     linear one where a shooting iterate's change mixes the modes with the noise of its Newton
     steps. (Table 1's free rotor at 180 steps a revolution: the estimate to a tenth of its
-    change in 14 quarter revolutions, where 24 left it uncertain by 16 %.)
+    change in 14 quarter revolutions, where shooting's iterates alone left it uncertain by
+    22 % after 24.)
 
     Parameters
     ----------

@@ -1265,7 +1265,7 @@ def simulate(p: Parameters) -> xr.Dataset:
     # quarter-revolution map, the multipliers are found first, on the response those ended on,
     # and that response restarts by Newton–Picard alone from them (the estimates' responses
     # take their Krylov vectors as secant pairs, below): the response to 1e-3 the
-    # extrapolation stalls on (its restarts land at 1.2–2e-3), 5.5 revolutions where
+    # extrapolation stalls on (its restarts land at 1.2–2e-3), 3.5 revolutions where
     # marching takes 15 on Table 1's case 1. The two responses differ within the outer
     # tolerance, which moves the largest multiplier by less than
     # FLOQUET_ACCURACY (Table 1: by 7e-5 at most, 0.91442 on case 1 against 0.91440 on its
@@ -1281,6 +1281,14 @@ def simulate(p: Parameters) -> xr.Dataset:
     if last:
         transient += rec.transient + p.revolutions
         rec = periodic_response()
+    def krylov_pairs() -> tuple[np.ndarray, np.ndarray, int] | None:
+        # the multipliers' Krylov vectors as secant pairs of the quarter-revolution map, for
+        # the estimates' responses (periodic.sector_response), once an Arnoldi run with a
+        # probe has found them: blocks of samples ending a quarter revolution after its start
+        if slow is None or not picard:
+            return None
+        return (*slow.pairs(), round(slow.t0 / sector) + 1)
+
     est = None
     if p.error_estimate or p.richardson:
         # the periodic response at a coarser step, from the recorded one's end: the harmonics'
@@ -1300,8 +1308,7 @@ def simulate(p: Parameters) -> xr.Dataset:
             n_sectors=N_BLADES, steps_per_rev=nrev, omega=omega, order=2,
             extrapolate=p.richardson, accuracy=ESTIMATE_ACCURACY,
             max_iterates=ESTIMATE_ITERATES, ratio=ESTIMATE_RATIO, usable=ESTIMATE_USABLE,
-            pairs=None if slow is None or not picard else (
-                *slow.pairs(), round(slow.t0 / sector) + 1))
+            pairs=krylov_pairs())
         if est.integrator is not None:
             report(f"step-error estimate {est.estimate:.3g} "
                    f"({est.integrator.n_steps / est.steps_per_rev:.2f} revolutions at "
@@ -1317,8 +1324,9 @@ def simulate(p: Parameters) -> xr.Dataset:
         # the recorded one
         wake.refine()
         uncertainty = 0.0
+        pairs = krylov_pairs()
         try:
-            if slow is not None and picard:
+            if pairs is not None:
                 # the refined wake changes the forcing, not the map's Jacobian: the
                 # multipliers' Krylov vectors are the iterates' secant pairs, as for the
                 # step-error estimate, and the response is extrapolated, not marched
@@ -1326,8 +1334,7 @@ def simulate(p: Parameters) -> xr.Dataset:
                     integ, lambda: sampler(integ), align, n_sectors=N_BLADES,
                     steps_per_rev=nrev, reference=rec.samples, omega=omega,
                     accuracy=ESTIMATE_ACCURACY, max_iterates=ESTIMATE_ITERATES,
-                    pairs=periodic.aligned_pairs((*slow.pairs(), round(slow.t0 / sector) + 1),
-                                                 align, nrev // N_BLADES))
+                    pairs=periodic.aligned_pairs(pairs, align, nrev // N_BLADES))
             else:
                 finer, iterates = periodic_response().samples, None
         except RuntimeError as exc:

@@ -186,7 +186,7 @@ def test_newton_tangent_is_the_weighted_sum_of_the_jacobians(case):
     """The Newton matrix's block from one complex step along a coordinate, its rate and its
     acceleration together (weights of a generalized-α step at 240 steps a revolution: a rate
     weight near 2e3 /s, an acceleration weight near 2e6 /s²) is the sum of the separate
-    Jacobians so weighted, to roundoff."""
+    Jacobians so weighted, to roundoff (measured 2.3e-16–3.4e-16 of its largest entry)."""
     st, q, v, a = case
     wq, wa = -1.0, -2.3e6
     wv = np.full(len(v), -1.9e3)
