@@ -907,7 +907,7 @@ def sector_response(integ, sample: Callable[[], Array], align: Callable[[Array, 
                     n_max: int = 8, min_iterates: int = 6, max_iterates: int = 16,
                     accuracy: float = 0.1, max_residual: float = 0.1,
                     history: Sequence[Sequence[Array]] | None = None,
-                    pairs: tuple[Array, Array] | None = None
+                    pairs: tuple[Array, Array] | None = None, separate_mean: bool = False
                     ) -> tuple[Array, float, int]:
     """The periodic response of ``integ`` near its state, by extrapolating its sector map.
 
@@ -971,6 +971,9 @@ def sector_response(integ, sample: Callable[[], Array], align: Callable[[Array, 
         (U, JU): changes of a block and their images under the map's Jacobian, each
         (p, steps_per_rev / n_sectors, columns) aligned and at this step's sample times like
         the blocks (column 0 not used), or ``None``.
+    separate_mean
+        Judge the harmonics as the periodicity test does with it (:func:`harmonic_scales`):
+        the vibratory ones against each signal's largest vibratory harmonic, not its mean.
     omega
         Rotor speed (rad/s).
     n_max, min_iterates, max_iterates, accuracy, max_residual
@@ -1003,7 +1006,7 @@ def sector_response(integ, sample: Callable[[], Array], align: Callable[[Array, 
     t0 = start * sector
     n_ref = round(2 * np.pi / omega / (reference[1, 0] - reference[0, 0]))
     c_ref = referred_harmonics(reference[-n_ref:], omega, n_max)
-    scale_ref = np.abs(c_ref).max(axis=0)
+    scale_ref = harmonic_scales(c_ref, separate_mean=separate_mean)
     live_ref = scale_ref > 0
 
     def unfold(block: Array) -> Array:  # the fixed point's revolution from its aligned block
@@ -1012,7 +1015,7 @@ def sector_response(integ, sample: Callable[[], Array], align: Callable[[Array, 
         return rev
 
     def relative(c: NDArray[np.complex128]) -> float:  # largest harmonic, relative to scale
-        return float(np.max(np.abs(c)[:, live_ref] / scale_ref[live_ref])) if np.any(
+        return float(np.max(np.abs(c)[live_ref] / scale_ref[live_ref])) if np.any(
             live_ref) else 0.0
 
     past = [np.array(run, dtype=float) for run in history or () if len(run) >= 3]
