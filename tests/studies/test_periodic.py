@@ -271,6 +271,19 @@ class _Ring:
         return z0, np.array(rows)
 
 
+def _sector_blocks(ring: _Ring, align, count: int) -> list[np.ndarray]:
+    """The ring's next ``count`` quarter revolutions' blocks of samples from t = 0, each
+    aligned to the phase of t = 0."""
+    out = []
+    for j in range(1, count + 1):
+        rows = []
+        for _ in range(round(1 / ring.h) // 4):
+            ring.step()
+            rows.append(ring.sample())
+        out.append(align(np.array(rows), j))
+    return out
+
+
 def _aligner(n_sectors: int):
     """``align`` for the ring: a sector is 4/n_sectors quarter revolutions."""
     def align(block: np.ndarray, j: int) -> np.ndarray:
@@ -361,14 +374,7 @@ def test_sector_response_with_the_maps_jacobian_known_as_pairs():
     align = _aligner(4)
 
     def blocks(z0: np.ndarray) -> list[np.ndarray]:  # two sectors' aligned blocks from z0
-        ring, out = _Ring(n, z0), []
-        for j in (1, 2):
-            rows = []
-            for _ in range(n // 4):
-                ring.step()
-                rows.append(ring.sample())
-            out.append(align(np.array(rows), j))
-        return out
+        return _sector_blocks(_Ring(n, z0), align, 2)
 
     base = blocks(np.zeros(4))
     directions = [*np.eye(4), *(1j * np.eye(4))]
@@ -403,21 +409,11 @@ def test_secant_pairs_of_another_map_leave_the_change_unexplained():
     change = np.abs(rev_harmonics(exact[:, 1:]) - rev_harmonics(fine[1::2, 1:])).max()
     align = _aligner(4)
 
-    def iterates(ring: _Ring, count: int) -> list[np.ndarray]:
-        out = []
-        for j in range(1, count + 1):
-            rows = []
-            for _ in range(n // 4):
-                ring.step()
-                rows.append(ring.sample())
-            out.append(align(np.array(rows), j))
-        return out
-
-    same = iterates(_Ring(n, np.ones(4)), 10)
+    same = _sector_blocks(_Ring(n, np.ones(4)), align, 10)
     other_ring = _Ring(n, np.ones(4))
     other_ring.mu = 0.9 * np.exp(0.5j)
-    other = iterates(other_ring, 10)
-    own = iterates(_Ring(n, z_fine), 2)
+    other = _sector_blocks(other_ring, align, 10)
+    own = _sector_blocks(_Ring(n, z_fine), align, 2)
     _, consistent = secant_weights([[b[:, 1:] for b in same], [b[:, 1:] for b in own]])
     _, inconsistent = secant_weights([[b[:, 1:] for b in other], [b[:, 1:] for b in own]])
     assert consistent < 1e-10 and inconsistent > 0.1, (consistent, inconsistent)
