@@ -1296,9 +1296,13 @@ def simulate(p: Parameters) -> xr.Dataset:
         # the multipliers' Krylov vectors as secant pairs of the quarter-revolution map, for
         # the estimates' responses (periodic.sector_response), once an Arnoldi run with a
         # probe has found them: blocks of samples ending a quarter revolution after its start
+        # (a whole quarter revolution, as the estimates' iterates are)
         if slow is None or not picard:
             return None
-        return (*slow.pairs(), round(slow.t0 / sector) + 1)
+        start = slow.t0 / sector
+        if abs(start - round(start)) > 1e-6:
+            return None
+        return (*slow.pairs(), round(start) + 1)
 
     est = None
     if p.error_estimate or p.richardson:
