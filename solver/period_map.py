@@ -423,8 +423,7 @@ def _arnoldi_on_map(integ, steps: int, keys: list[str], weight: Array, symmetry,
     def consistent(q: Array, v: Array) -> Array:
         return project_velocities(system, q, v, t0, metric)
 
-    seen: list[Array] = []  # what the probe saw of each march, observed
-    rows_seen: list[Array] = []  # and its rows
+    seen: list[Array] = []  # the probe's rows of each march
     # the base march's Newton path (an integrator that records one:
     # solver.integrators.NewtonPath), which every march then follows: each step converges in
     # about two iterations on the path's factors, and to well within Newton's tolerance, the
@@ -451,10 +450,7 @@ def _arnoldi_on_map(integ, steps: int, keys: list[str], weight: Array, symmetry,
         if record:
             path = recorded
         if probe is not None:
-            block = np.array(rows, dtype=float)
-            rows_seen.append(block)
-            seen.append(np.asarray(observe(block) if observe is not None else block,
-                                   dtype=float))
+            seen.append(np.array(rows, dtype=float))
         count += 1
         out = [np.copy(getattr(integ, k)) for k in keys]
         return out if symmetry is None else list(symmetry.back(*out, k=1))
@@ -479,7 +475,6 @@ def _arnoldi_on_map(integ, steps: int, keys: list[str], weight: Array, symmetry,
     if hasattr(integ, "recording"):
         integrate(start, record=True)
         seen.clear()
-        rows_seen.clear()
     raw = integrate(start)
     if pins.size:  # the pins' spin back to the input's, the same turn for every output
         align = spin_alignment(pins, start[0], raw[0])
@@ -510,10 +505,13 @@ def _arnoldi_on_map(integ, steps: int, keys: list[str], weight: Array, symmetry,
     subspace = None
     if probe is not None:
         # seen[0] is the base march, seen[1 + j] the march from Krylov vector j
-        base_seen, base_rows = seen[0], rows_seen[0]
+        def observed(block: Array) -> Array:
+            return np.asarray(observe(block) if observe is not None else block, dtype=float)
+
+        base_rows, base_observed = seen[0], observed(seen[0])
         k = basis.shape[1]
-        cols = [((o - base_seen) / eps).ravel() for o in seen[1 : 1 + k]]
-        rows = np.array([(r - base_rows) / eps for r in rows_seen[1 : 1 + k]])
+        cols = [((observed(r) - base_observed) / eps).ravel() for r in seen[1 : 1 + k]]
+        rows = np.array([(r - base_rows) / eps for r in seen[1 : 1 + k]])
         rows[:, :, 0] = base_rows[:, 0]
         subspace = SlowSubspace(keys, weight, basis, hess, np.column_stack(cols), rows, t0)
     # the largest pair checked by a fresh application of the map: Arnoldi's residual estimate

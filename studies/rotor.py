@@ -1292,6 +1292,7 @@ def simulate(p: Parameters) -> xr.Dataset:
     if last:
         transient += rec.transient + p.revolutions
         rec = periodic_response()
+
     def krylov_pairs() -> tuple[np.ndarray, np.ndarray, int] | None:
         # the multipliers' Krylov vectors as secant pairs of the quarter-revolution map, for
         # the estimates' responses (periodic.sector_response), once an Arnoldi run with a
