@@ -59,8 +59,7 @@ After settling the run shoots (``shooting_window`` > 0): the model is symmetric 
 revolution with the blades and bifilars permuted (:func:`symmetry`), and
 :func:`studies.periodic.shoot` extrapolates the quarter-revolution iterates to their fixed
 point and restarts the model from it (beam nodes' and bodies' triads combined on the rotation
-group); on a modal airframe, which has no such symmetry, the one-revolution iterates
-(:func:`shooting_symmetry`). With ``shooting_window = 0`` it marches instead, and each lag
+group). With ``shooting_window = 0`` it marches instead, and each lag
 damper then also carries delayed feedback over one revolution (:func:`lag_feedback_gains`,
 damping ratio ``lag_feedback``), which vanishes on any periodic response and is removed
 before recording.
@@ -213,8 +212,7 @@ FLOQUET_TOL = 1e-10
 # the prescribed wake, whose last periodic response is marched, the coarse iterates stop at an
 # uncertainty of 17-19 %, and unextrapolated the free case's 4P hub force and moment were 7 %
 # and 11 % off (its estimate, 2 %, is relative to each signal's largest harmonic, the mean).
-# On the quarter-revolution map the multipliers' Arnoldi run comes before the last response,
-# and its Krylov vectors' responses are the coarse iterates' secant pairs
+# The multipliers' Arnoldi run comes before the last response, and its Krylov vectors' responses are the coarse iterates' secant pairs
 # (periodic.step_error's ``pairs``).
 ESTIMATE_RATIO = 4 / 3
 ESTIMATE_ACCURACY = 0.1
@@ -465,7 +463,7 @@ OUTPUTS: dict[str, Output] = {
     "floquet_multiplier_max": Output(
         "1", "largest modulus of the periodic response's Floquet multipliers over one "
         "revolution (above 1: unstable), by Arnoldi on the quarter-revolution map "
-        "(solver.period_map; on a modal airframe, the revolution's map)", dims=(),
+        "(solver.period_map)", dims=(),
         optional=True),
     "run_floquet_revolutions": Output(
         "1", "revolutions simulated by the Floquet multipliers' perturbed quarter revolutions "
@@ -1141,21 +1139,14 @@ def simulate(p: Parameters) -> xr.Dataset:
     observed = [*(_Sampler.COLUMNS.index(c) for c in ("x", "y", "fx", "fy", "m11", "m22")),
                 *range(_PINS.start, _PINS.stop)]
 
-    # quarter revolutions per iterate of the map shot on (4 on the quarter-revolution map, 1
-    # on the one-revolution map, after which every blade and pin is back in its own place)
-    per_iterate = N_BLADES // (1 if shooting_symmetry(system, parts) is None else N_BLADES)
-    # Newton–Picard's restarts (which leave the extrapolation's out) on the quarter-revolution
-    # map only (see `early` below)
-    picard = per_iterate == 1
-
     def observe(block: np.ndarray, j: int) -> np.ndarray:
-        return align(block, j * per_iterate)[:, observed]
+        return align(block, j)[:, observed]
 
     def observe_slow(block: np.ndarray, j: int) -> np.ndarray:
         # what Newton–Picard measures the slow modes' amplitudes on: every load and angle the
         # samples hold (the blades' root loads and flap angles tell the rotor's modes apart,
         # which the hub's signals alone leave ill-conditioned)
-        return align(block, j * per_iterate)[:, SLOW_OBSERVED]
+        return align(block, j)[:, SLOW_OBSERVED]
 
     hint = "raise max_revolutions, settle_revolutions or pin_damping_ratio"
     sector = 2 * np.pi / omega / N_BLADES  # s
@@ -1172,7 +1163,7 @@ def simulate(p: Parameters) -> xr.Dataset:
         # (``trust``: a restart within the tolerance ends the search, see the wake's loop)
         if p.shooting_window:
             return shoot(integ, lambda: sampler(integ), signals, observe=observe,
-                         symmetry=shooting_symmetry(system, parts), system=system,
+                         symmetry=symmetry(system, parts), system=system,
                          steps_per_rev=nrev,
                          revolutions=p.revolutions, max_revolutions=p.max_revolutions,
                          tolerance=tolerance, groups=groups, separate_mean=True,
@@ -1265,27 +1256,23 @@ def simulate(p: Parameters) -> xr.Dataset:
         if mm is not None and mm.subspace is not None:
             slow = mm.subspace
         if mm is not None:  # the revolutions of every Arnoldi run, a failed one's included
-            spent += mm.evaluations * per_iterate / N_BLADES
+            spent += mm.evaluations / N_BLADES
             if found:
                 found["run_floquet_revolutions"] = np.float64(spent)
         return found, note
 
     spent = 0.0  # revolutions of the multipliers' perturbed maps
 
-    # With a last periodic response to come (after the wake's or the trim's iterations) on the
-    # quarter-revolution map, the multipliers are found first, on the response those ended on,
+    # With a last periodic response to come (after the wake's or the trim's iterations), the
+    # multipliers are found first, on the response those ended on,
     # and that response restarts by Newton–Picard alone from them (the estimates' responses
     # take their Krylov vectors as secant pairs, below): the response to 1e-3 the
     # extrapolation stalls on (its restarts land at 1.2–2e-3), 3.5 revolutions where
     # marching takes 15 on Table 1's case 1. The two responses differ within the outer
     # tolerance, which moves the largest multiplier by less than
     # FLOQUET_ACCURACY (Table 1: by 7e-5 at most, 0.91442 on case 1 against 0.91440 on its
-    # last response). Not on the one-revolution map of a modal airframe, whose Newton–Picard
-    # restarts can miss (the airframe study's locked case: the first grew the change from
-    # 1.2e-2 to 4.3e-2, four left it at 2e-2, and the refined wake's response was then
-    # marched, 70 revolutions; by the extrapolation's restarts the last response took 12):
-    # there the multipliers come last and the responses shoot by extrapolation.
-    early = last and picard
+    # last response; the modal airframe's free case: by 3e-4, 0.9562 against 0.9559).
+    early = last
     refined = wake is not None and p.wake_error_estimate  # the wake error estimate's response
     if early:
         floquet, floquet_note = multipliers(probe=True)
@@ -1298,7 +1285,7 @@ def simulate(p: Parameters) -> xr.Dataset:
         # the estimates' responses (periodic.sector_response), once an Arnoldi run with a
         # probe has found them: blocks of samples ending a quarter revolution after its start
         # (a whole quarter revolution, as the estimates' iterates are)
-        if slow is None or not picard:
+        if slow is None:
             return None
         start = slow.t0 / sector
         if abs(start - round(start)) > 1e-6:
@@ -1332,7 +1319,7 @@ def simulate(p: Parameters) -> xr.Dataset:
     if not early or (p.floquet and not floquet):
         # (found before the last response, the largest pair may fail its fresh check when a
         # perturbed march took another Newton path: then on the last response again)
-        floquet, floquet_note = multipliers(probe=refined and picard)
+        floquet, floquet_note = multipliers(probe=refined)
     wake_error, wake_note = float("nan"), ""
     if refined:
         # the wake's truncation error of the vibratory loads: the periodic response again
@@ -1487,15 +1474,14 @@ def _multipliers(p: Parameters, integ, system: System, parts: RotorParts, *, pro
         return {}, "", None
     t = time.perf_counter()
     try:
-        sym = shooting_symmetry(system, parts)
-        sectors = N_BLADES if sym is not None else 1
-        mm = map_multipliers(integ, p.steps_per_rev // sectors, symmetry=sym, rate=p.hub_speed,
+        mm = map_multipliers(integ, p.steps_per_rev // N_BLADES,
+                             symmetry=symmetry(system, parts), rate=p.hub_speed,
                              vectors=FLOQUET_VECTORS, eps=FLOQUET_EPS, tol=FLOQUET_TOL,
                              accuracy=FLOQUET_ACCURACY, probe=probe, observe=observe)
     except (RuntimeError, ValueError) as exc:
         return {}, f"no Floquet multipliers: {exc}", None
     report(f"Floquet multipliers: largest {mm.largest:.4f} ({mm.evaluations} maps of 1/"
-           f"{sectors} revolution, {time.perf_counter() - t:.1f} s; residual "
+           f"{N_BLADES} revolution, {time.perf_counter() - t:.1f} s; residual "
            f"{mm.residuals[0]:.1e}, "
            f"fresh {mm.fresh_residual:.1e})")
     if mm.failure:
@@ -1521,22 +1507,21 @@ def _spinning(system: System, parts: RotorParts) -> tuple[list[list[Any]], list[
     return sectors, rotating
 
 
-def shooting_symmetry(system: System, parts: RotorParts) -> CyclicSymmetry | None:
-    """The symmetry the shooting and the Floquet multipliers map with: the quarter revolution
-    (:func:`symmetry`) on the fuselage-beam, whose in-plane stiffness is the same in every
-    direction; none (the one-revolution map) on a modal airframe, which is not symmetric under
-    a quarter turn (its roll and pitch, its lateral and vertical modes differ), so that the
-    blades' responses on it are not one response shifted by a quarter revolution."""
-    return None if parts.airframe is not None else symmetry(system, parts)
-
-
 def symmetry(system: System, parts: RotorParts) -> CyclicSymmetry:
     """The rotor's quarter-revolution symmetry: the hub turns about the shaft head's axis
     (tilting with the fuselage-beam), blade j + 1 (its hinge links and airloads) and bifilar
     j + 1 take the places of blade j and bifilar j; the fuselage-beam, shaft head and inflow
     are non-rotating (the equivalent's particle too; its rigid mass turns with the hub), and
     so are a modal airframe's coordinates: in no sector and not rotating, they are left as
-    they are."""
+    they are.
+
+    It asks no symmetry of the airframe: the non-rotating structure is time-invariant, and a
+    quarter revolution later blade j + 1 stands where blade j stood, in the same flight and
+    on the same airframe, so the quarter turn with the blades renamed maps motions onto
+    motions on any airframe (the rotor's filter: identical blades pass only multiples of
+    4/rev to the fixed frame, whatever the airframe's roll and pitch, lateral and vertical
+    modes; `tests/studies/test_symmetry.py` checks that the map commutes with a march on the
+    shipped modal airframe)."""
     sectors, rotating = _spinning(system, parts)
     return CyclicSymmetry(system, sectors, rotating=rotating, axis=Z, centre=parts.shaft)
 
@@ -1626,6 +1611,6 @@ def _check(p: Parameters) -> Parameters | None:
 SPEC = ModelSpec("rotor", PARAMETERS, simulate, _check,
                  description="four-bladed elastic UH-60 rotor with aerodynamics and four "
                              "bifilars on a fuselage-beam",
-                 outputs=OUTPUTS, version="17",
+                 outputs=OUTPUTS, version="18",
                  # the two parts take about as long to compile (curve joints / the rest)
                  warm_up=(partial(compile_bifilar, "galpha"), compile_kernels))
