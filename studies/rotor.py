@@ -59,10 +59,11 @@ After settling the run shoots (``shooting_window`` > 0): the model is symmetric 
 revolution with the blades and bifilars permuted (:func:`symmetry`), and
 :func:`studies.periodic.shoot` extrapolates the quarter-revolution iterates to their fixed
 point and restarts the model from it (beam nodes' and bodies' triads combined on the rotation
-group). With ``shooting_window = 0`` it marches instead, and each lag
-damper then also carries delayed feedback over one revolution (:func:`lag_feedback_gains`,
-damping ratio ``lag_feedback``), which vanishes on any periodic response and is removed
-before recording.
+group); on a modal airframe, whose suspension's slow transient the quarter-revolution
+iterates barely move, the one-revolution iterates (:func:`shooting_symmetry`). With
+``shooting_window = 0`` it marches instead, and each lag damper then also carries delayed
+feedback over one revolution (:func:`lag_feedback_gains`, damping ratio ``lag_feedback``),
+which vanishes on any periodic response and is removed before recording.
 
 Besides the loads, each case archives the controls flown, the shaft power (the drive's
 moment about the shaft axis, mean × Ω), blade 0's flap angle and its first harmonics, and the
@@ -212,8 +213,8 @@ FLOQUET_TOL = 1e-10
 # the prescribed wake, whose last periodic response is marched, the coarse iterates stop at an
 # uncertainty of 17-19 %, and unextrapolated the free case's 4P hub force and moment were 7 %
 # and 11 % off (its estimate, 2 %, is relative to each signal's largest harmonic, the mean).
-# The multipliers' Arnoldi run comes before the last response (on the fuselage-beam), and its
-# Krylov vectors' responses are the coarse iterates' secant pairs (periodic.step_error's
+# The multipliers' Arnoldi run (on the quarter-revolution map) comes before the estimates, and
+# its Krylov vectors' responses are the coarse iterates' secant pairs (periodic.step_error's
 # ``pairs``).
 ESTIMATE_RATIO = 4 / 3
 ESTIMATE_ACCURACY = 0.1
@@ -1120,13 +1121,7 @@ def simulate(p: Parameters) -> xr.Dataset:
         report("periodic with the lag feedback: removed it, recording")
 
     def signals(block: np.ndarray) -> np.ndarray:
-        # periodicity of the hub motion in the rotating frame, the hub forces and the pins.
-        # On a modal airframe the hub motion is judged in the fixed frame: there the
-        # suspension's mean deflection (0.26 m on the shipped airframe) is the rotating
-        # frame's 1P, against which the vibratory test let a drift of the suspension pass
-        # (the recorded fixed-frame motion's 1P-3P at 5-10 µm beside its 4P of 100 µm)
-        if parts.airframe is not None:
-            return np.column_stack([block[:, 1:5], block[:, _PINS]])
+        # periodicity of the hub motion in the rotating frame, the hub forces and the pins
         xr_, yr_ = to_rotating(omega, block[:, 0], block[:, 1], block[:, 2])
         return np.column_stack([xr_, yr_, block[:, 3:5], block[:, _PINS]])
 
@@ -1146,14 +1141,21 @@ def simulate(p: Parameters) -> xr.Dataset:
     observed = [*(_Sampler.COLUMNS.index(c) for c in ("x", "y", "fx", "fy", "m11", "m22")),
                 *range(_PINS.start, _PINS.stop)]
 
+    # quarter revolutions per iterate of the map shot on (4 on the quarter-revolution map, 1
+    # on the one-revolution map, after which every blade and pin is back in its own place)
+    per_iterate = N_BLADES // (1 if shooting_symmetry(system, parts) is None else N_BLADES)
+    # Newton–Picard's restarts (which leave the extrapolation's out) on the quarter-revolution
+    # map only (see `early` below)
+    picard = per_iterate == 1
+
     def observe(block: np.ndarray, j: int) -> np.ndarray:
-        return align(block, j)[:, observed]
+        return align(block, j * per_iterate)[:, observed]
 
     def observe_slow(block: np.ndarray, j: int) -> np.ndarray:
         # what Newton–Picard measures the slow modes' amplitudes on: every load and angle the
         # samples hold (the blades' root loads and flap angles tell the rotor's modes apart,
         # which the hub's signals alone leave ill-conditioned)
-        return align(block, j)[:, SLOW_OBSERVED]
+        return align(block, j * per_iterate)[:, SLOW_OBSERVED]
 
     hint = "raise max_revolutions, settle_revolutions or pin_damping_ratio"
     sector = 2 * np.pi / omega / N_BLADES  # s
@@ -1170,7 +1172,7 @@ def simulate(p: Parameters) -> xr.Dataset:
         # (``trust``: a restart within the tolerance ends the search, see the wake's loop)
         if p.shooting_window:
             return shoot(integ, lambda: sampler(integ), signals, observe=observe,
-                         symmetry=symmetry(system, parts), system=system,
+                         symmetry=shooting_symmetry(system, parts), system=system,
                          steps_per_rev=nrev,
                          revolutions=p.revolutions, max_revolutions=p.max_revolutions,
                          tolerance=tolerance, groups=groups, separate_mean=True,
@@ -1259,7 +1261,7 @@ def simulate(p: Parameters) -> xr.Dataset:
         found, note, mm = _multipliers(
             p, integ, system, parts,
             probe=partial(_Sampler(system, parts, record_wake=False), integ) if probe else None,
-            observe=partial(observe_slow, j=1))
+            observe=lambda block: align(block, 1)[:, SLOW_OBSERVED])
         if mm is not None and mm.subspace is not None:
             slow = mm.subspace
         if mm is not None:  # the revolutions of every Arnoldi run, a failed one's included
@@ -1270,19 +1272,20 @@ def simulate(p: Parameters) -> xr.Dataset:
 
     spent = 0.0  # revolutions of the multipliers' perturbed maps
 
-    # With a last periodic response to come (after the wake's or the trim's iterations), the
-    # multipliers are found first, on the response those ended on,
+    # With a last periodic response to come (after the wake's or the trim's iterations) on the
+    # quarter-revolution map, the multipliers are found first, on the response those ended on,
     # and that response restarts by Newton–Picard alone from them (the estimates' responses
     # take their Krylov vectors as secant pairs, below): the response to 1e-3 the
     # extrapolation stalls on (its restarts land at 1.2–2e-3), 3.5 revolutions where
     # marching takes 15 on Table 1's case 1. The two responses differ within the outer
     # tolerance, which moves the largest multiplier by less than
     # FLOQUET_ACCURACY (Table 1: by 7e-5 at most, 0.91442 on case 1 against 0.91440 on its
-    # last response). Not on a modal airframe: there the restarts from the slow subspace
-    # left the suspension's slow drift (0.97 a revolution), and the free case's last
-    # response, judged in the fixed frame, stalled at a change of 2e-3 after 80 revolutions;
-    # the extrapolation's restarts and marching found it in 19 (the multipliers come last).
-    early = last and parts.airframe is None
+    # last response). Not on the one-revolution map of a modal airframe, whose Newton–Picard
+    # restarts can miss (the airframe study's locked case: the first grew the change from
+    # 1.2e-2 to 4.3e-2, four left it at 2e-2, and the refined wake's response was then
+    # marched, 70 revolutions; by the extrapolation's restarts the last response took 12):
+    # there the multipliers come last and the responses shoot by extrapolation.
+    early = last and picard
     refined = wake is not None and p.wake_error_estimate  # the wake error estimate's response
     if early:
         floquet, floquet_note = multipliers(probe=True)
@@ -1302,14 +1305,21 @@ def simulate(p: Parameters) -> xr.Dataset:
             return None
         return (*slow.pairs(), round(start) + 1)
 
-    est = None
-    if p.error_estimate or p.richardson:
-        # the periodic response at a coarser step, from the recorded one's end: the harmonics'
-        # time-step error and their extrapolation to zero step (each scheme second order).
-        # First to a whole quarter revolution (a trim's ramp may end between):
+    estimating = p.error_estimate or p.richardson
+    if estimating:
+        # the estimates' iterates (and the multipliers' maps) start at a whole quarter
+        # revolution (a trim's ramp may end between)
         while integ.t < math.ceil(integ.t / sector - 1e-6) * sector - 0.5 * h:
             step()
-
+    if not early or (p.floquet and not floquet):
+        # on the recorded response, before the estimates, whose responses take their Krylov
+        # vectors as secant pairs (found before the last response, the largest pair may fail
+        # its fresh check when a perturbed march took another Newton path: then again here)
+        floquet, floquet_note = multipliers(probe=estimating or refined)
+    est = None
+    if estimating:
+        # the periodic response at a coarser step, from the recorded one's end: the harmonics'
+        # time-step error and their extrapolation to zero step (each scheme second order)
         def coarse(n: int) -> Integrator:
             return integrator(system, p, 2 * np.pi / omega / n, parts,
                               tol=newton_tolerance(n, p.inflow),
@@ -1326,10 +1336,6 @@ def simulate(p: Parameters) -> xr.Dataset:
             report(f"step-error estimate {est.estimate:.3g} "
                    f"({est.integrator.n_steps / est.steps_per_rev:.2f} revolutions at "
                    f"{est.steps_per_rev} steps)")
-    if not early or (p.floquet and not floquet):
-        # (found before the last response, the largest pair may fail its fresh check when a
-        # perturbed march took another Newton path: then on the last response again)
-        floquet, floquet_note = multipliers(probe=refined)
     wake_error, wake_note = float("nan"), ""
     if refined:
         # the wake's truncation error of the vibratory loads: the periodic response again
@@ -1517,6 +1523,18 @@ def _spinning(system: System, parts: RotorParts) -> tuple[list[list[Any]], list[
     return sectors, rotating
 
 
+def shooting_symmetry(system: System, parts: RotorParts) -> CyclicSymmetry | None:
+    """The symmetry the shooting maps with: the quarter revolution (:func:`symmetry`) on the
+    fuselage-beam; none (the one-revolution map) on a modal airframe. The quarter turn is a
+    symmetry there too, but the airframe's slowest transient, its suspension's, decays by
+    2.6 % a revolution (Floquet multiplier 0.974 on the shipped airframe), 0.65 % a quarter
+    revolution, which the quarter-revolution iterates barely move: their extrapolation and
+    Newton–Picard's restarts left a drift of the suspension in the recorded revolution (the
+    fixed-frame hub motion's 1P-3P at 3-10 µm beside its 4P of 100 µm, the 4P hub force off
+    by 0.7 %), where the one-revolution iterates' left 0.1 µm."""
+    return None if parts.airframe is not None else symmetry(system, parts)
+
+
 def symmetry(system: System, parts: RotorParts) -> CyclicSymmetry:
     """The rotor's quarter-revolution symmetry: the hub turns about the shaft head's axis
     (tilting with the fuselage-beam), blade j + 1 (its hinge links and airloads) and bifilar
@@ -1530,8 +1548,8 @@ def symmetry(system: System, parts: RotorParts) -> CyclicSymmetry:
     on the same airframe, so the quarter turn with the blades renamed maps motions onto
     motions on any airframe (the rotor's filter: identical blades pass only multiples of
     4/rev to the fixed frame, whatever the airframe's roll and pitch, lateral and vertical
-    modes; `tests/studies/test_symmetry.py` checks that the map commutes with a march on the
-    shipped modal airframe)."""
+    modes; `tests/studies/test_rotor_airframe.py` checks that the map commutes with a march
+    on the shipped modal airframe)."""
     sectors, rotating = _spinning(system, parts)
     return CyclicSymmetry(system, sectors, rotating=rotating, axis=Z, centre=parts.shaft)
 
