@@ -1331,7 +1331,7 @@ def simulate(p: Parameters) -> xr.Dataset:
             n_sectors=N_BLADES, steps_per_rev=nrev, omega=omega, order=2,
             extrapolate=p.richardson, accuracy=ESTIMATE_ACCURACY,
             max_iterates=ESTIMATE_ITERATES, ratio=ESTIMATE_RATIO, usable=ESTIMATE_USABLE,
-            pairs=krylov_pairs())
+            pairs=krylov_pairs(), separate_mean=parts.airframe is not None)
         if est.integrator is not None:
             report(f"step-error estimate {est.estimate:.3g} "
                    f"({est.integrator.n_steps / est.steps_per_rev:.2f} revolutions at "
