@@ -1165,8 +1165,7 @@ def step_error(rec: PeriodicRecord, state: dict, coarse: Callable[[int], object]
                omega: float, order: int, extrapolate: bool, accuracy: float = 0.1,
                max_iterates: int = 12, n_max: int = 8, ratio: float = 2.0,
                usable: float | None = None,
-               pairs: tuple[Array, Array, int] | None = None,
-               separate_mean: bool = False) -> StepError:
+               pairs: tuple[Array, Array, int] | None = None) -> StepError:
     """The time-step error of a periodic response's harmonics, and their Richardson
     extrapolation to zero step.
 
@@ -1184,10 +1183,8 @@ def step_error(rec: PeriodicRecord, state: dict, coarse: Callable[[int], object]
     ``max_iterates`` the most sector periods marched at the coarse step. An estimate whose
     iterates ran out before ``accuracy`` is still applied up to an uncertainty of ``usable``
     (default ``accuracy``; the note says how uncertain), which leaves that fraction of the
-    step's error. With ``separate_mean`` the coarse response's harmonics are judged as
-    :func:`sector_response` judges them with it (the vibratory ones against each signal's
-    largest vibratory harmonic). Failures are not raised: the result then keeps ``rec``'s
-    samples and says why in ``note``.
+    step's error. Failures are not raised: the result then keeps ``rec``'s samples and says
+    why in ``note``.
     """
     unextrapolated = ", harmonics not extrapolated" if extrapolate else ""
     n_c = coarser_steps(steps_per_rev, n_sectors, n_max, ratio)
@@ -1206,8 +1203,7 @@ def step_error(rec: PeriodicRecord, state: dict, coarse: Callable[[int], object]
         rev, uncertainty, _ = sector_response(
             integ, sampler(integ), align, n_sectors=n_sectors, steps_per_rev=n_c,
             reference=rec.samples, omega=omega, n_max=n_max, accuracy=accuracy,
-            max_iterates=max_iterates, history=history, pairs=known,
-            separate_mean=separate_mean)
+            max_iterates=max_iterates, history=history, pairs=known)
     except RuntimeError as exc:
         result.note = f"no step-error estimate{unextrapolated}: {exc}"
         return result
