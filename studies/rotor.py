@@ -214,8 +214,9 @@ FLOQUET_TOL = 1e-10
 # uncertainty of 17-19 %, and unextrapolated the free case's 4P hub force and moment were 7 %
 # and 11 % off (its estimate, 2 %, is relative to each signal's largest harmonic, the mean).
 # The multipliers' Arnoldi run (on the quarter-revolution map) comes before the estimates, and
-# its Krylov vectors' responses are the coarse iterates' secant pairs (periodic.step_error's
-# ``pairs``).
+# on the fuselage-beam its Krylov vectors' responses are the coarse iterates' secant pairs
+# (periodic.step_error's ``pairs``; not on a modal airframe, see ``krylov_pairs`` in
+# simulate).
 ESTIMATE_RATIO = 4 / 3
 ESTIMATE_ACCURACY = 0.1
 # The wake error estimate's response with the refined wake is extrapolated likewise, its
@@ -1318,8 +1319,9 @@ def simulate(p: Parameters) -> xr.Dataset:
             step()
     if not early or (p.floquet and not floquet):
         # on the recorded response, before the estimates, whose responses take their Krylov
-        # vectors as secant pairs (found before the last response, the largest pair may fail
-        # its fresh check when a perturbed march took another Newton path: then again here)
+        # vectors as secant pairs on the fuselage-beam (found before the last response, the
+        # largest pair may fail its fresh check when a perturbed march took another Newton
+        # path: then again here)
         floquet, floquet_note = multipliers(probe=(estimating or refined) and picard)
     est = None
     if estimating:
