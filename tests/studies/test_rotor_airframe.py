@@ -82,15 +82,15 @@ def test_symmetry_leaves_the_modal_coordinates_unchanged():
 
 
 def test_the_quarter_turn_commutes_with_a_march_on_the_modal_airframe():
-    """The quarter-revolution symmetry the rotor shoots with asks no symmetry of the airframe
-    (studies.rotor.symmetry): the shipped airframe's roll and pitch, lateral and vertical modes
-    differ, and still the march from a state turned back a quarter revolution (blades and
-    bifilars renamed, the rotating parts turned about the shaft head, the airframe's modal
-    coordinates as they are, a quarter period earlier) is the march from the state, turned
-    back. Measured after 80 steps from a state 200 steps from the start: 2.8e-6 of the
-    largest coordinate, 1.3e-6 of the largest modal coordinate (the fuselage-beam's rotor,
-    symmetric in every direction, 2.6e-5: what is left is the rotor's own, the scheme's
-    acceleration history turned as the symmetry turns rates, not the airframe's)."""
+    """The rotor's quarter-revolution symmetry (its Floquet multipliers' map on any airframe)
+    asks no symmetry of the airframe (studies.rotor.symmetry): the shipped airframe's roll
+    and pitch, lateral and vertical modes differ, and still the march from a state turned
+    back a quarter revolution (blades and bifilars renamed, the rotating parts turned about
+    the shaft head, the airframe's modal coordinates as they are, a quarter period earlier)
+    is the march from the state, turned back. Measured after 80 steps from a state 200 steps
+    from the start: 2.8e-6 of the largest coordinate, 1.3e-6 of the largest modal coordinate
+    (the fuselage-beam's rotor, symmetric in every direction, 2.6e-5: what is left is the
+    rotor's own, not the airframe's)."""
     p = rotor.SPEC.validate({**COARSE, "fuselage": "modal"})
     model, parts = rotor.build(p)
     system = System(model)
