@@ -1258,11 +1258,13 @@ def simulate(p: Parameters) -> xr.Dataset:
         # the multipliers' Arnoldi run on the periodic response integ ends on; with ``probe``
         # it also records what the samples show of each of its vectors: the map's slow
         # subspace, for the Newton–Picard restarts of the periodic responses found after it
+        # and the estimates' secant pairs (asked for only where the shooting's map is the
+        # quarter revolution's, ``picard``, which observe_slow's alignment assumes)
         nonlocal slow, spent
         found, note, mm = _multipliers(
             p, integ, system, parts,
             probe=partial(_Sampler(system, parts, record_wake=False), integ) if probe else None,
-            observe=lambda block: align(block, 1)[:, SLOW_OBSERVED])
+            observe=partial(observe_slow, j=1))
         if mm is not None and mm.subspace is not None:
             slow = mm.subspace
         if mm is not None:  # the revolutions of every Arnoldi run, a failed one's included
