@@ -275,7 +275,10 @@ def material(qe: Array, qr: Array, same: bool, n: Array, dn: Array, wc: Array,
              count: IArray) -> Array:
     """Material stiffness Σ_g B(Q)ᵀ (w C) B(Q_r) per element (E, 48, 48).
 
-    ``same`` says Q_r is Q (B is built once). B is sparse by structure: the three rows of
+    ``same`` says Q_r is Q: B is built once, and the matrix is symmetric (as every section
+    stiffness is, :class:`~solver.sections.SectionTable`), so only its entries on and right
+    of each row triplet's diagonal block are summed and the rest mirrored, about half the
+    multiply-adds. B is sparse by structure: the three rows of
     node a's vector u (its components) are nonzero only for the three strains that contain u
     (``_STRAINS_OF``), so (w C) B_r needs three products per entry and each point adds, to
     those three rows of the element matrix at once, three rank-1 terms: 3 × 48² multiply-adds
@@ -313,11 +316,15 @@ def material(qe: Array, qr: Array, same: bool, n: Array, dn: Array, wc: Array,
                 b00, b01, b02 = b[p0, r], b[p1, r], b[p2, r]
                 b10, b11, b12 = b[p0, r + 1], b[p1, r + 1], b[p2, r + 1]
                 b20, b21, b22 = b[p0, r + 2], b[p1, r + 2], b[p2, r + 2]
-                for col in range(48):
+                for col in range(r if same else 0, 48):
                     c0, c1, c2 = cb[p0, col], cb[p1, col], cb[p2, col]
                     ke[r, col] += b00 * c0 + b01 * c1 + b02 * c2
                     ke[r + 1, col] += b10 * c0 + b11 * c1 + b12 * c2
                     ke[r + 2, col] += b20 * c0 + b21 * c1 + b22 * c2
+        if same:  # entry (i, j) left of row i's triplet is entry (j, i), summed above
+            for i in range(3, 48):
+                for j in range(3 * (i // 3)):
+                    ke[i, j] = ke[j, i]
     return k
 
 

@@ -79,6 +79,8 @@ class SectionTable:
         c = table(self.stiffness, (6, 6), "stiffness", "N, N m, N m2")
         if np.abs(c - np.swapaxes(c, 1, 2)).max() > 1e-9 * max(1.0, np.abs(c).max()):
             raise ValueError("section stiffness matrices must be symmetric")
+        # exactly symmetric from here on (the beams' material stiffness sums half of itself)
+        c = 0.5 * (c + np.swapaxes(c, 1, 2))
         for k, ck in enumerate(c):
             ev = np.linalg.eigvalsh(ck)
             if ev.min() < -1e-9 * max(1.0, ev.max()):
