@@ -502,39 +502,50 @@ class System:
 
     def reaction(self, joint, q: Array, lam: Array, t: float) -> tuple[Array, Array]:
         """Force (N) and moment about the joint point (N·m) the joint applies to body_b."""
+        return self.reactions([joint], q, lam, t)[0]
+
+    def reactions(self, joints, q: Array, lam: Array, t: float) -> list[tuple[Array, Array]]:
+        """:meth:`reaction` of each of ``joints``, the constraint Jacobian's values evaluated
+        once for them all (a sampler asks for several joints' reactions at every step)."""
         quad = self.quad
-        # the Jacobian entries of the joint's rows in body_b's columns, and its point on
-        # body_b, found once per joint (a sampler asks for the same joint's reaction at
-        # every step)
-        b = joint.body_b
-        o = self.offset[b]
-        found = self._reaction_entries.get(id(joint))
-        if found is None:
-            width = 3 if isinstance(b, PointMass) else 12
-            entries = np.flatnonzero(np.isin(quad.jac_rows, self.quad_set.rows[joint])
-                                     & (quad.jac_cols >= o) & (quad.jac_cols < o + width))
-            point = None if width == 3 else joint.point_on_b(self)
-            found = self._reaction_entries[id(joint)] = (entries, point)
-        entries, point = found
-        gv = quad.jacobian_values(q, t)[entries]
-        f = -np.bincount(quad.jac_cols[entries] - o, gv * lam[quad.jac_rows[entries]],
-                         minlength=12)
-        force = f[:3]
-        if point is None:
-            return force, np.zeros(3)
-        d = q[o + 3 : o + 12].reshape(3, 3)
-        m_cm = _cross_sum(d, f[3:12].reshape(3, 3))
-        return force, m_cm - _cross_sum((point.value(q) - q[o : o + 3])[None], force[None])
+        gv = quad.jacobian_values(q, t)
+        out = []
+        for joint in joints:
+            # the Jacobian entries of the joint's rows in body_b's columns, and its point on
+            # body_b, found once per joint
+            b = joint.body_b
+            o = self.offset[b]
+            found = self._reaction_entries.get(id(joint))
+            if found is None:
+                width = 3 if isinstance(b, PointMass) else 12
+                entries = np.flatnonzero(np.isin(quad.jac_rows, self.quad_set.rows[joint])
+                                         & (quad.jac_cols >= o) & (quad.jac_cols < o + width))
+                point = None if width == 3 else joint.point_on_b(self)
+                found = self._reaction_entries[id(joint)] = (entries, point)
+            entries, point = found
+            f = -np.bincount(quad.jac_cols[entries] - o,
+                             gv[entries] * lam[quad.jac_rows[entries]], minlength=12)
+            force = f[:3]
+            if point is None:
+                out.append((force, np.zeros(3)))
+                continue
+            d = q[o + 3 : o + 12].reshape(3, 3)
+            m_cm = _cross_sum(d, f[3:12].reshape(3, 3))
+            out.append((force, m_cm - _cross_sum((point.value(q) - q[o : o + 3])[None],
+                                                 force[None])))
+        return out
 
 
 def _cross_sum(a: Array, b: Array) -> Array:
-    """Σᵢ aᵢ × bᵢ over the rows of two (k, 3) arrays (``np.cross(a, b).sum(axis=0)``, at a
-    fraction of its call cost on the few rows of one body)."""
-    return np.array([
-        float(a[:, 1] @ b[:, 2] - a[:, 2] @ b[:, 1]),
-        float(a[:, 2] @ b[:, 0] - a[:, 0] @ b[:, 2]),
-        float(a[:, 0] @ b[:, 1] - a[:, 1] @ b[:, 0]),
-    ])
+    """Σᵢ aᵢ × bᵢ over the rows of two (k, 3) arrays (``np.cross(a, b).sum(axis=0)``): on the
+    few rows of one body, in Python floats, 1.1 µs against 5.6 µs for six slices' products
+    and 8 µs for ``np.cross`` (a sampler takes two per joint reaction at every step)."""
+    s0 = s1 = s2 = 0.0
+    for (a0, a1, a2), (b0, b1, b2) in zip(a.tolist(), b.tolist(), strict=True):
+        s0 += a1 * b2 - a2 * b1
+        s1 += a2 * b0 - a0 * b2
+        s2 += a0 * b1 - a1 * b0
+    return np.array([s0, s1, s2])
 
 
 def _cat(arrs: list, dtype=np.int64) -> NDArray:

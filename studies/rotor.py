@@ -850,6 +850,7 @@ class _Sampler:
         # the drive (shaft to hub) and each blade's flap hinge (hub to its flap link)
         self.drive = joints["rotor"]
         self.flap = [joints[f"flap{k}"] for k in range(N_BLADES)]
+        self.reacting = [*self.pitch, self.drive, *([parts.attachment] if self.modal else [])]
         # the pitch links (control_system = "swashplate"): their set, each blade's member and
         # the horn's end on the root section
         links = [joints.get(f"pitch_link{k}") for k in range(N_BLADES)]
@@ -865,14 +866,15 @@ class _Sampler:
         self.o_blade_tip = system.offset[parts.blades[0].tip]
         self.absorbers = AbsorberProbe(system, parts.absorbers, parts.hub)
 
-    def blade(self, integ, k: int) -> tuple[float, float, float, float, float, float]:
+    def blade(self, integ, k: int, force: np.ndarray, moment: np.ndarray
+              ) -> tuple[float, float, float, float, float, float]:
         """Blade k's root shears (flapwise v3, chordwise v2), axial force n1 and torsion t1,
         in its root section's axes (N, N m), its flap angle (degree, positive up) and its
-        pitch link's tension (N; zero without pitch links)."""
+        pitch link's tension (N; zero without pitch links), from its pitch bearing's
+        ``force`` and ``moment`` on the blade (:meth:`solver.system.System.reaction`)."""
         s, q = self.s, integ.q
-        # the bearing's force and moment on the blade, in the root section's axes (d1, d2,
-        # d3); the section's stress resultant is their opposite
-        force, moment = s.reaction(self.pitch[k], q, integ.lam, integ.t)
+        # the bearing's load in the root section's axes (d1, d2, d3); the section's stress
+        # resultant is its opposite
         o = self.o_blade_root[k]
         tension = 0.0
         if self.links is not None:
@@ -896,12 +898,15 @@ class _Sampler:
         s, q, v, parts = self.s, integ.q, integ.v, self.parts
         x = q[self.o_shaft : self.o_shaft + 3]
         stations: np.ndarray = np.zeros(0)
+        # the pitch bearings', the drive's and a modal airframe's attachment's reactions
+        reactions = s.reactions(self.reacting, q, integ.lam, integ.t)
+        bearings, drive = reactions[:N_BLADES], reactions[N_BLADES][1]
         if self.modal:
+            attached = reactions[N_BLADES + 1]
             # the attachment's reaction is the airframe's force and moment (about the hub
             # point) on the massless shaft head: the rotor passes their opposite to the
             # airframe, as the beam's top section passes the shaft head's load down the beam
-            force, moment = s.reaction(parts.attachment, q, integ.lam, integ.t)
-            f_top, m_top = -force, -moment
+            f_top, m_top = -attached[0], -attached[1]
             m11 = m22 = 0.0  # no fuselage-beam (NaN in the outputs)
             # η̈: the scheme's own (galpha's q̈ satisfies the discrete equations of motion at
             # the step's end), else the equations of motion solved at the state (ep)
@@ -932,12 +937,11 @@ class _Sampler:
         else:
             lam0 = parts.inflow.mean_inflow(q[self.o_inflow : self.o_inflow
                                               + parts.inflow.n_states])
-        v3, v2, n1, t1, flap, link = self.blade(integ, 0)
-        others = [x for k in range(1, N_BLADES) for x in self.blade(integ, k)]
+        v3, v2, n1, t1, flap, link = self.blade(integ, 0, *bearings[0])
+        others = [x for k in range(1, N_BLADES) for x in self.blade(integ, k, *bearings[k])]
         # the drive's moment on the hub about the shaft axis (the shaft head's d3, tilting
         # with the fuselage-beam): the shaft torque; the joint prescribes the hub's rotation
         # relative to the shaft at Ω about that axis, so its power into the rotor is torque Ω
-        _, drive = s.reaction(self.drive, q, integ.lam, integ.t)
         torque = drive @ q[self.o_shaft + 9 : self.o_shaft + 12]
         return np.array([integ.t, x[0], x[1], f_top[0], f_top[1], f_top[2], m11, m22,
                          cm[0], cm[1], thrust, lam0, v3, v2, n1, t1, m_top[0], m_top[1],
