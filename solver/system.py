@@ -15,6 +15,7 @@ the block values with one ``np.bincount``. The model is read, never written.
 from __future__ import annotations
 
 import itertools
+from collections.abc import Sequence
 
 import numpy as np
 import scipy.sparse as sp
@@ -504,7 +505,8 @@ class System:
         """Force (N) and moment about the joint point (N·m) the joint applies to body_b."""
         return self.reactions([joint], q, lam, t)[0]
 
-    def reactions(self, joints, q: Array, lam: Array, t: float) -> list[tuple[Array, Array]]:
+    def reactions(self, joints: Sequence, q: Array, lam: Array,
+                  t: float) -> list[tuple[Array, Array]]:
         """:meth:`reaction` of each of ``joints``, the constraint Jacobian's values evaluated
         once for them all (a sampler asks for several joints' reactions at every step)."""
         quad = self.quad
