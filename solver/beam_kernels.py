@@ -25,16 +25,14 @@ term table:
   geometric stiffness Σ_k S_k h_k ⊗ I3 with the points summed first, per strain, and spread
   over h_k's terms once per element.
 
-On the rotor model (26 elements, 680 stiffness points) the beams' share of a step fell from
-about a quarter to about a twentieth: the gradient about 10 times, the stiffness about 5 times
-faster (the commit that introduced this module has the measured numbers).
-
 Layout (that of :class:`solver.beams.BeamSet`): element vectors Q are (E, 16, 3), node a's
 vector u at row 4a + u; a 48-long coordinate index is 3(4a + u) + component. Quadrature data
 are padded per element to W slots: ``n``, ``dn`` (E, W, 4) the shape functions and their
-s-derivatives (1/m), ``w`` (E, W) the ds weights (m), ``c`` (E, W, 6, 6) the section stiffness
-(N, N·m, N·m²), ``count`` (E,) the number of real points of each element (the rest are left
-zero in every output).
+s-derivatives (1/m), ``wc`` (E, W, W, 6, 6) the weighted section stiffness (w C)_gh coupling
+the points g and h (block-diagonal, w_g C_g, unless the element is ``dense``: condensed),
+``count`` (E,) the number of real points of each element (the rest are left zero in every
+output). The kernels take the weighted stresses T_g = Σ_h (w C)_gh (e_h − e0_h) where a
+point's stress resultants times its weight would go.
 """
 
 from __future__ import annotations
@@ -46,6 +44,7 @@ from solver.jit import njit
 
 Array = NDArray[np.float64]
 IArray = NDArray[np.int64]
+BArray = NDArray[np.bool_]
 
 # (strain k, vector i, vector j, coefficient c): e_k gets c·(u_i · u_j') where u_0 = x and
 # u_1..3 = d1..3.  Γ_i = d_i·x';  K_1 = ½(d3·d2' − d2·d3') etc. The one definition of the
@@ -146,39 +145,31 @@ def strains(qe: Array, n: Array, dn: Array, count: IArray, e0: Array) -> Array:
 
 
 @njit(cache=True)
-def stresses(c: Array, e: Array, count: IArray) -> Array:
-    """Stress resultants S = C (e − e0) (E, W, 6), N and N·m, at the real points."""
-    s = np.zeros(e.shape)
+def weighted_stresses(wc: Array, dense: BArray, e: Array, count: IArray) -> Array:
+    """T_g = Σ_h (w C)_gh (e_h − e0_h) (E, W, 6), N·m and N·m² (the stress resultants times
+    their ds weight): on an element that is not ``dense`` (w C) is block-diagonal over its
+    points, T_g = w_g C_g (e_g − e0_g); on a dense one (condensed, see
+    :class:`solver.beams.BeamSet`) it couples them."""
+    t = np.zeros(e.shape)
     for el in range(e.shape[0]):
-        for g in range(count[el]):
-            for k in range(6):
-                acc = 0.0
-                for m in range(6):
-                    acc += c[el, g, k, m] * e[el, g, m]
-                s[el, g, k] = acc
-    return s
-
-
-@njit(cache=True)
-def energy(e: Array, wc: Array, count: IArray) -> float:
-    """Strain energy ½ Σ_g (e − e0)ᵀ (w C) (e − e0) (J); ``wc`` = w C (E, W, 6, 6)."""
-    total = 0.0
-    for el in range(e.shape[0]):
-        for g in range(count[el]):
-            for k in range(6):
-                acc = 0.0
-                for m in range(6):
-                    acc += wc[el, g, k, m] * e[el, g, m]
-                total += e[el, g, k] * acc
-    return 0.5 * total
+        c = count[el]
+        for g in range(c):
+            lo, hi = (0, c) if dense[el] else (g, g + 1)
+            for h in range(lo, hi):
+                for k in range(6):
+                    acc = 0.0
+                    for m in range(6):
+                        acc += wc[el, g, h, k, m] * e[el, h, m]
+                    t[el, g, k] += acc
+    return t
 
 
 @njit(cache=True)
 def _add_point_force(n: Array, dn: Array, u: Array, v: Array, ws: Array, fg: Array,
                      f: Array) -> None:
-    """f (48,) += Bᵀ (w S) at a point, without forming B: node a's vector x gets
-    N_a F_x + N_a' G_x, where term (k, i, j, c) adds c w S_k v_j to F_i and c w S_k u_i to
-    G_j (:func:`_strain_gradient`'s α and β contracted with w S). ``fg`` (2, 4, 3) scratch."""
+    """f (48,) += Bᵀ T at a point (T its weighted stress), without forming B: node a's vector
+    x gets N_a F_x + N_a' G_x, where term (k, i, j, c) adds c T_k v_j to F_i and c T_k u_i to
+    G_j (:func:`_strain_gradient`'s α and β contracted with T). ``fg`` (2, 4, 3) scratch."""
     fg[:, :, :] = 0.0
     for t in range(_TK.shape[0]):
         i, j = _TI[t], _TJ[t]
@@ -194,61 +185,64 @@ def _add_point_force(n: Array, dn: Array, u: Array, v: Array, ws: Array, fg: Arr
 
 
 @njit(cache=True)
-def force(qe: Array, s: Array, n: Array, dn: Array, w: Array, count: IArray) -> Array:
-    """Internal force ∫ B(Q)ᵀ S ds per element (E, 48): N on x, N·m on the directors.
+def force(qe: Array, t: Array, n: Array, dn: Array, count: IArray) -> Array:
+    """Internal force Σ_g B_g(Q)ᵀ T_g per element (E, 48), T the weighted stresses
+    (:func:`weighted_stresses`): N on x, N·m on the directors.
 
-    With S the mean of two end-point stresses and Q the midpoint this is the exact discrete
+    With T of the mean of two end-point strains and Q the midpoint this is the exact discrete
     gradient (the strains are quadratic: e_f − e_i = B(Q_m)(Q_f − Q_i))."""
     ne = qe.shape[0]
     f = np.zeros((ne, 48))
     u = np.empty((4, 3))
     v = np.empty((4, 3))
     fg = np.empty((2, 4, 3))
-    ws = np.empty(6)
     for el in range(ne):
         for g in range(count[el]):
             _interpolate(qe[el], n[el, g], dn[el, g], u, v)
-            for k in range(6):
-                ws[k] = w[el, g] * s[el, g, k]
-            _add_point_force(n[el, g], dn[el, g], u, v, ws, fg, f[el])
+            _add_point_force(n[el, g], dn[el, g], u, v, t[el, g], fg, f[el])
     return f
 
 
 @njit(cache=True)
-def internal_force(qe: Array, n: Array, dn: Array, w: Array, c: Array, count: IArray,
+def internal_force(qe: Array, n: Array, dn: Array, wc: Array, dense: BArray, count: IArray,
                    e0: Array) -> Array:
-    """The gradient of the strain energy, ∫ Bᵀ C (e − e0) ds per element (E, 48), in one pass:
-    :func:`strains`, :func:`stresses` and :func:`force` fused (one interpolation a point),
-    bit-identical to calling them in turn."""
-    ne = qe.shape[0]
+    """The gradient of the strain energy, Σ_g B_gᵀ T_g per element (E, 48), in one pass:
+    :func:`strains`, :func:`weighted_stresses` and :func:`force` fused (one interpolation a
+    point)."""
+    ne, nw = qe.shape[0], n.shape[1]
     f = np.zeros((ne, 48))
-    u = np.empty((4, 3))
-    v = np.empty((4, 3))
+    u = np.empty((nw, 4, 3))
+    v = np.empty((nw, 4, 3))
     fg = np.empty((2, 4, 3))
-    e = np.empty(6)
+    e = np.empty((nw, 6))
     ws = np.empty(6)
     for el in range(ne):
-        for g in range(count[el]):
-            _interpolate(qe[el], n[el, g], dn[el, g], u, v)
-            _point_strains(u, v, e0[el, g], e)
-            for k in range(6):
-                acc = 0.0
-                for m in range(6):
-                    acc += c[el, g, k, m] * e[m]
-                ws[k] = w[el, g] * acc
-            _add_point_force(n[el, g], dn[el, g], u, v, ws, fg, f[el])
+        c = count[el]
+        for g in range(c):
+            _interpolate(qe[el], n[el, g], dn[el, g], u[g], v[g])
+            _point_strains(u[g], v[g], e0[el, g], e[g])
+        for g in range(c):
+            lo, hi = (0, c) if dense[el] else (g, g + 1)
+            ws[:] = 0.0
+            for h in range(lo, hi):
+                for k in range(6):
+                    acc = 0.0
+                    for m in range(6):
+                        acc += wc[el, g, h, k, m] * e[h, m]
+                    ws[k] += acc
+            _add_point_force(n[el, g], dn[el, g], u[g], v[g], ws, fg, f[el])
     return f
 
 
 @njit(cache=True)
-def stress_matrices(s: Array, n: Array, dn: Array, w: Array, count: IArray) -> Array:
-    """Σ over each element's points of Σ_k w S_k h_k (E, 16, 16), N and N·m: the geometric
-    stiffness is this times I3.
+def stress_matrices(t: Array, n: Array, dn: Array, count: IArray) -> Array:
+    """Σ over each element's points of Σ_k T_k h_k (E, 16, 16), T the weighted stresses
+    (:func:`weighted_stresses`), N and N·m: the geometric stiffness is this times I3.
 
     Term (k, i, j, c) of h_k holds c N_a N_b' at (4a + i, 4b + j) and c N_a' N_b at
     (4a + j, 4b + i) (the second derivative of c u_i·v_j). The points' sum is taken first,
-    A_k[a, b] = Σ_g w S_k N_a N_b', and spread over the terms once per element."""
-    ne = s.shape[0]
+    A_k[a, b] = Σ_g T_k N_a N_b', and spread over the terms once per element."""
+    ne = t.shape[0]
     hs = np.zeros((ne, 16, 16))
     acc = np.empty((6, 4, 4))
     for el in range(ne):
@@ -256,13 +250,13 @@ def stress_matrices(s: Array, n: Array, dn: Array, w: Array, count: IArray) -> A
         for g in range(count[el]):
             na, da = n[el, g], dn[el, g]
             for k in range(6):
-                ws = w[el, g] * s[el, g, k]
+                ws = t[el, g, k]
                 for a in range(4):
                     wn = ws * na[a]
                     for bb in range(4):
                         acc[k, a, bb] += wn * da[bb]
-        for t in range(_TK.shape[0]):
-            k, i, j, c = _TK[t], _TI[t], _TJ[t], _TC[t]
+        for tt in range(_TK.shape[0]):
+            k, i, j, c = _TK[tt], _TI[tt], _TJ[tt], _TC[tt]
             for a in range(4):
                 for bb in range(4):
                     hs[el, 4 * a + i, 4 * bb + j] += c * acc[k, a, bb]
@@ -272,50 +266,56 @@ def stress_matrices(s: Array, n: Array, dn: Array, w: Array, count: IArray) -> A
 
 @njit(cache=True)
 def material(qe: Array, qr: Array, same: bool, n: Array, dn: Array, wc: Array,
-             count: IArray) -> Array:
-    """Material stiffness Σ_g B(Q)ᵀ (w C) B(Q_r) per element (E, 48, 48).
+             dense: BArray, count: IArray) -> Array:
+    """Material stiffness Σ_gh B_g(Q)ᵀ (w C)_gh B_h(Q_r) per element (E, 48, 48) ((w C)
+    block-diagonal over the points of an element that is not ``dense``).
 
     ``same`` says Q_r is Q: B is built once, and the matrix is symmetric (as every section
     stiffness is, :class:`~solver.sections.SectionTable`), so only its entries on and right
     of each row triplet's diagonal block are summed and the rest mirrored, about half the
-    multiply-adds. B is sparse by structure: the three rows of
-    node a's vector u (its components) are nonzero only for the three strains that contain u
-    (``_STRAINS_OF``), so (w C) B_r needs three products per entry and each point adds, to
-    those three rows of the element matrix at once, three rank-1 terms: 3 × 48² multiply-adds
-    a point instead of the dense 6 × 48², with each (w C) B_r entry loaded once for the three
-    rows."""
-    ne = qe.shape[0]
+    multiply-adds. B is sparse by structure: the three rows of node a's vector u (its
+    components) are nonzero only for the three strains that contain u (``_STRAINS_OF``), so
+    (w C) B_r needs three products per entry and each point adds, to those three rows of the
+    element matrix at once, three rank-1 terms: 3 × 48² multiply-adds a point instead of the
+    dense 6 × 48², with each (w C) B_r entry loaded once for the three rows."""
+    ne, nw = qe.shape[0], n.shape[1]
     k = np.zeros((ne, 48, 48))
     u = np.empty((4, 3))
     v = np.empty((4, 3))
     ab = np.empty((2, 6, 4, 3))
-    b = np.empty((6, 48))
-    br = np.empty((6, 48))
+    b = np.empty((nw, 6, 48))
+    br = np.empty((nw, 6, 48))
     cb = np.empty((6, 48))
     for el in range(ne):
         ke = k[el]
-        for g in range(count[el]):
+        c = count[el]
+        for g in range(c):
             na, da = n[el, g], dn[el, g]
             _interpolate(qe[el], na, da, u, v)
-            _strain_gradient(na, da, u, v, ab, b)
-            if same:
-                br[:, :] = b
-            else:
+            _strain_gradient(na, da, u, v, ab, b[g])
+            if not same:
                 _interpolate(qr[el], na, da, u, v)
-                _strain_gradient(na, da, u, v, ab, br)
-            c = wc[el, g]
-            for col in range(48):  # cb = (w C) B_r over B_r's nonzero rows
-                sk = _STRAINS_OF[(col // 3) % 4]
-                x0, x1, x2 = br[sk[0], col], br[sk[1], col], br[sk[2], col]
-                for p in range(6):
-                    cb[p, col] = c[p, sk[0]] * x0 + c[p, sk[1]] * x1 + c[p, sk[2]] * x2
+                _strain_gradient(na, da, u, v, ab, br[g])
+        right = b if same else br
+        for g in range(c):
+            lo, hi = (0, c) if dense[el] else (g, g + 1)
+            cb[:, :] = 0.0
+            for h in range(lo, hi):  # cb = Σ_h (w C)_gh B_r,h over B_r,h's nonzero rows
+                wgh = wc[el, g, h]
+                bh = right[h]
+                for col in range(48):
+                    sk = _STRAINS_OF[(col // 3) % 4]
+                    x0, x1, x2 = bh[sk[0], col], bh[sk[1], col], bh[sk[2], col]
+                    for p in range(6):
+                        cb[p, col] += wgh[p, sk[0]] * x0 + wgh[p, sk[1]] * x1 + wgh[p, sk[2]] * x2
+            bg = b[g]
             for al in range(16):  # node a's vector u = al % 4: rows r, r + 1, r + 2
                 sk = _STRAINS_OF[al % 4]
                 p0, p1, p2 = sk[0], sk[1], sk[2]
                 r = 3 * al
-                b00, b01, b02 = b[p0, r], b[p1, r], b[p2, r]
-                b10, b11, b12 = b[p0, r + 1], b[p1, r + 1], b[p2, r + 1]
-                b20, b21, b22 = b[p0, r + 2], b[p1, r + 2], b[p2, r + 2]
+                b00, b01, b02 = bg[p0, r], bg[p1, r], bg[p2, r]
+                b10, b11, b12 = bg[p0, r + 1], bg[p1, r + 1], bg[p2, r + 1]
+                b20, b21, b22 = bg[p0, r + 2], bg[p1, r + 2], bg[p2, r + 2]
                 for col in range(r if same else 0, 48):
                     c0, c1, c2 = cb[p0, col], cb[p1, col], cb[p2, col]
                     ke[r, col] += b00 * c0 + b01 * c1 + b02 * c2

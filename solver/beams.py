@@ -34,7 +34,10 @@ Quadrature is segmented: the element is split at every section-property station 
 per segment — reduced integration for a uniform cubic element, which removes the membrane
 locking of curved elements (at 6 elements the 45° bend's out-of-plane tip error is +0.01 %
 against −0.10 % with full integration; Bathe & Bolourchi 1979) — mass 4 points per segment
-(exact for piecewise-linear properties on a straight element).
+(exact for piecewise-linear properties on a straight element). A straight element with more
+than two segments is *condensed* (:class:`BeamSet`): its strain energy integrated exactly on 6
+points coupled by precomputed weights, the exact value of what its segments' points
+approximate (on the UH-60A blade 6 points an element instead of 24–36).
 """
 
 from __future__ import annotations
@@ -290,59 +293,108 @@ class Beam(Element):
                            parts={node: 12 * k for k, node in enumerate(self.nodes)})]
 
 
+# Points of a condensed element (BeamSet): on a straight element the strains are polynomials
+# of degree 5 in ξ (cubic directors times the quadratic derivatives of cubic positions), fixed
+# by their values at 6 points
+CONDENSED_POINTS = 6
+
+
+def _interpolating(nodes: Array, x: Array) -> Array:
+    """The Lagrange polynomials of ``nodes`` at ``x``: (len(x), len(nodes))."""
+    out = np.ones((len(x), len(nodes)))
+    for m, xm in enumerate(nodes):
+        for j, xj in enumerate(nodes):
+            if j != m:
+                out[:, m] *= (x - xj) / (xm - xj)
+    return out
+
+
 class BeamSet(ElementSet):
     """Strain energy of all beams of a model, by compiled loops over their quadrature points.
 
     The quadrature data sit in a padded stack per element (``width`` slots, the most points of
-    any element; unused slots have zero shape functions, C and weight and are skipped), so the
-    strains, stresses and weights of a point keep one slot. The arithmetic is in
+    any element; unused slots have zero shape functions and weights and are skipped), so the
+    strains and weighted stresses of a point keep one slot. The arithmetic is in
     :mod:`solver.beam_kernels`: per point the interpolated x, d_i and their s-derivatives, the
-    strains and the strain gradient B from the one strain-term table; force ∫ Bᵀ S ds,
-    material stiffness ∫ Bᵀ C B ds (three nonzero strains per row of B), geometric stiffness
-    (Σ_k w S_k h_k) ⊗ I3.
+    strains and the strain gradient B from the one strain-term table; the weighted stresses
+    T_g = Σ_h (w C)_gh (e_h − e0_h), force Σ_g B_gᵀ T_g, material stiffness
+    Σ_gh B_gᵀ (w C)_gh B_h (three nonzero strains per row of B), geometric stiffness
+    (Σ_g T_g,k h_k) ⊗ I3.
+
+    The weights (w C)_gh are block-diagonal, w_g C(s_g), on the segmented Gauss points of
+    :meth:`Beam.quadrature`, except on a *condensed* element: a straight one whose segments
+    (the section stations inside it) would give it more than :data:`CONDENSED_POINTS` points,
+    at ``stiffness_points`` ≥ 3 a segment. Its strains, polynomials of degree 5 in ξ, are
+    e(ξ) = Σ_g L_g(ξ) e_g through their values at 6 Gauss points, so that its energy is
+    exactly ½ Σ_gh e_gᵀ W_gh e_h with W_gh = ∫ L_g L_h C ds over the element (integrated once,
+    with 6 Gauss points a segment: exact for piecewise-linear properties): the exact integral
+    of the segmented rule's integrand, on 6 points instead of 3 a segment (on the rotor's
+    blades 6 instead of 24–36).
     """
 
     def __init__(self, elements, system) -> None:
         super().__init__(elements, system)
-        idx, el, n, dn, wds, c = [], [], [], [], [], []
-        n_el = 0
+        idx: list[Array] = []
+        # per element: N, N', (w C)_gh and whether it couples the points (condensed)
+        points: list[tuple[Array, Array, Array, bool]] = []
         for b in elements:
             o = system.offset[b]
             idx.append(o + 36 * np.arange(b.n_elements)[:, None] + np.arange(48))
             quad = b.quadrature(b.stiffness_points)
             nb, dnb, wb = b._geometry(quad)
-            el.append(quad["element"] + n_el)
-            n.append(nb)
-            dn.append(dnb)
-            wds.append(wb)
-            c.append(b.sections.at(quad["s"])["stiffness"])
-            n_el += b.n_elements
+            cb = b.sections.at(quad["s"])["stiffness"]
+            fine = None
+            for e in range(b.n_elements):
+                at = quad["element"] == e
+                if b.stiffness_points >= 3 and at.sum() > CONDENSED_POINTS:
+                    if fine is None:
+                        fine = b.quadrature(CONDENSED_POINTS)
+                    cond = self._condensed(b, e, fine)
+                    if cond is not None:
+                        points.append((*cond, True))
+                        continue
+                wc = np.zeros((at.sum(), at.sum(), 6, 6))
+                wc[np.arange(at.sum()), np.arange(at.sum())] = wb[at, None, None] * cb[at]
+                points.append((nb[at], dnb[at], wc, False))
         self.idx = np.concatenate(idx)  # (E, 48) global coordinates of each element
-        el = np.concatenate(el)  # element of each quadrature point
-        wds, stiff = np.concatenate(wds), np.concatenate(c)
-        # quadrature points are generated element by element: slot of each point in its
-        # element's padded stack
-        starts = np.searchsorted(el, np.arange(n_el))
-        self._count = np.diff(np.append(starts, len(el))).astype(np.int64)
+        n_el = len(points)
+        self._count = np.array([len(p[0]) for p in points], dtype=np.int64)
         width = int(self._count.max())
-        slot = el * width + np.arange(len(el)) - starts[el]
-
-        def padded(a: Array) -> Array:
-            out = np.zeros((n_el * width, *a.shape[1:]))
-            out[slot] = a
-            return out.reshape(n_el, width, *a.shape[1:])
-
-        self._n = padded(np.concatenate(n))  # (E, W, 4) shape functions
-        self._dn = padded(np.concatenate(dn))  # (E, W, 4) their s-derivatives (1/m)
-        self._w = padded(wds)  # (E, W) ds weights (m)
-        self._C = padded(stiff)  # (E, W, 6, 6) section stiffness
-        self._wC = padded(wds[:, None, None] * stiff)
+        self._n = np.zeros((n_el, width, 4))  # shape functions
+        self._dn = np.zeros((n_el, width, 4))  # their s-derivatives (1/m)
+        self._wc = np.zeros((n_el, width, width, 6, 6))  # (w C)_gh (N m, N m2, N m3)
+        for el, (n, dn, wc, _) in enumerate(points):
+            c = len(n)
+            self._n[el, :c], self._dn[el, :c], self._wc[el, :c, :c] = n, dn, wc
+        self._dense = np.array([p[3] for p in points])
         self._e0 = np.zeros((n_el, width, 6))
         # reference strains: zero force there
         self._e0 = self._strains(system.q0_raw)[1].reshape(n_el, width, 6)
         self.grad_idx = self.idx.ravel()
         self.stiff_rows = np.repeat(self.idx, 48, axis=1).ravel()
         self.stiff_cols = np.tile(self.idx, (1, 48)).ravel()
+
+    @staticmethod
+    def _condensed(b: Beam, e: int, fine: dict[str, Array]
+                   ) -> tuple[Array, Array, Array] | None:
+        """Element ``e`` of beam ``b`` condensed (see the class docstring): its N and N' at the
+        6 Gauss points and W_gh (6, 6, 6, 6), from ``fine``, ``b``'s quadrature at 6 points a
+        segment; None if the element is not straight (its |dX/dξ| not constant, so that its
+        strains are not polynomials)."""
+        xg, _ = np.polynomial.legendre.leggauss(CONDENSED_POINTS)
+        at = fine["element"] == e
+        sub = {k: v[at] for k, v in fine.items()}
+        _, _, wds = b._geometry(sub)
+        jac = wds / sub["w"]
+        if np.ptp(jac) > 1e-12 * jac.max():
+            return None
+        n, dn, _ = b._geometry({"element": np.full(CONDENSED_POINTS, e), "xi": xg,
+                                "s": np.zeros(CONDENSED_POINTS),
+                                "w": np.zeros(CONDENSED_POINTS)})
+        lag = _interpolating(xg, sub["xi"])  # (F, 6)
+        c = b.sections.at(sub["s"])["stiffness"]
+        wc = np.einsum("f,fg,fh,fkl->ghkl", wds, lag, lag, c)
+        return n, dn, wc
 
     def _element_vectors(self, q: Array) -> Array:
         """The nodal 3-vectors Q (E, 16, 3) of every element."""
@@ -356,28 +408,30 @@ class BeamSet(ElementSet):
         return qe, e.reshape(-1, 6)
 
     def _stress(self, e: Array) -> Array:
-        """Stress resultants C (e − e0) in the padded slots (E · width, 6)."""
-        s = kernels.stresses(self._C, e.reshape(self._e0.shape), self._count)
-        return s.reshape(-1, 6)
+        """Weighted stresses T_g = Σ_h (w C)_gh (e_h − e0_h) in the padded slots
+        (E · width, 6)."""
+        t = kernels.weighted_stresses(self._wc, self._dense, e.reshape(self._e0.shape),
+                                      self._count)
+        return t.reshape(-1, 6)
 
     def _stress_matrices(self, stress: Array) -> Array:
-        """Σ over each element's points of Σ_k w S_k h_k: (E, 16, 16)."""
+        """Σ over each element's points of Σ_k T_k h_k: (E, 16, 16)."""
         return kernels.stress_matrices(stress.reshape(self._e0.shape), self._n, self._dn,
-                                       self._w, self._count)
+                                       self._count)
 
     def _force(self, qe: Array, stress: Array) -> Array:
-        """∫ Bᵀ S ds per element, flattened on ``grad_idx``: B_k = h_k Q."""
-        return kernels.force(qe, stress.reshape(self._e0.shape), self._n, self._dn, self._w,
+        """Σ_g B_gᵀ T_g per element, flattened on ``grad_idx``: B_k = h_k Q."""
+        return kernels.force(qe, stress.reshape(self._e0.shape), self._n, self._dn,
                              self._count).ravel()
 
     def potential(self, q):
         _, e = self._strains(q)
-        return float(kernels.energy(e.reshape(self._e0.shape), self._wC, self._count))
+        return 0.5 * float(np.sum(e * self._stress(e)))
 
     def gradient(self, q):
         # _force(qe, _stress(e)) of _strains(q), fused into one compiled pass
-        return kernels.internal_force(self._element_vectors(q), self._n, self._dn, self._w,
-                                      self._C, self._count, self._e0).ravel()
+        return kernels.internal_force(self._element_vectors(q), self._n, self._dn, self._wc,
+                                      self._dense, self._count, self._e0).ravel()
 
     def discrete_gradient(self, qi, qf):
         # e is quadratic in q: e_f − e_i = B(q_m)(q_f − q_i) exactly, so the midpoint B
@@ -388,14 +442,15 @@ class BeamSet(ElementSet):
         return self._force(qm, self._stress(0.5 * (ei + ef)))
 
     def _material(self, qe: Array, qe_right: Array | None = None) -> Array:
-        """Material stiffness Σ_g Bᵀ wC B per element (E, 48, 48): positive semidefinite.
-        With ``qe_right``, Σ_g B(Q)ᵀ wC B(Q_right)."""
+        """Material stiffness Σ_gh B_gᵀ (w C)_gh B_h per element (E, 48, 48): positive
+        semidefinite. With ``qe_right``, Σ_gh B_g(Q)ᵀ (w C)_gh B_h(Q_right)."""
         same = qe_right is None
         return kernels.material(qe, qe if same else qe_right, same, self._n, self._dn,
-                                self._wC, self._count)
+                                self._wc, self._dense, self._count)
 
     def _with_geometric(self, k: Array, stress: Array) -> Array:
-        """k (E, 48, 48) plus the geometric stiffness of ``stress``: (Σ_k w S_k h_k) ⊗ I3."""
+        """k (E, 48, 48) plus the geometric stiffness of the weighted stresses:
+        (Σ_g T_g,k h_k) ⊗ I3."""
         kernels.add_geometric(k, self._stress_matrices(stress))
         return k.ravel()
 
@@ -454,17 +509,13 @@ class SectionProbe:
         self.n, self.dn = n[:, None, :], dn[:, None, :]
         self.count = np.ones(len(n), dtype=np.int64)
         self.local = 36 * el[:, None] + np.arange(48)
-        self.C = beam.sections.at(quad["s"])["stiffness"][:, None]
+        # C at each point, as the weighted-stress kernel's one-point blocks
+        self.wc = beam.sections.at(quad["s"])["stiffness"][:, None, None]
+        self.dense = np.zeros(len(n), dtype=bool)
         self.e0 = np.zeros((len(n), 1, 6))
         self.e0 = self._strains(beam.reference_coordinates().ravel()[self.local])
         # quadratic Lagrange interpolation through the Gauss points
-        xi = -1.0 + 2.0 * (s - s0) / (s1 - s0)
-        lag = np.ones((len(s), 3))
-        for a in range(3):
-            for b in range(3):
-                if a != b:
-                    lag[:, a] *= (xi - xg[b]) / (xg[a] - xg[b])
-        self.lag = lag
+        self.lag = _interpolating(xg, -1.0 + 2.0 * (s - s0) / (s1 - s0))
 
     def _strains(self, qloc: Array) -> Array:
         """Strains minus the reference ones (3 len(s), 1, 6) from the element vectors."""
@@ -473,7 +524,8 @@ class SectionProbe:
     def __call__(self, system, q: Array) -> Array:
         """(len(s), 6) resultants at the configuration q of ``system``."""
         e = self._strains(q[system.offset[self.beam] + self.local])
-        stress = kernels.stresses(self.C, e, self.count).reshape(len(self.lag), 3, 6)
+        stress = kernels.weighted_stresses(self.wc, self.dense, e, self.count)
+        stress = stress.reshape(len(self.lag), 3, 6)
         return np.einsum("ga,gak->gk", self.lag, stress)
 
 

@@ -67,4 +67,4 @@ def simulate(p: Parameters) -> xr.Dataset:
 
 SPEC = ModelSpec("fanplot", PARAMETERS, simulate, check,
                  description="natural frequencies of the articulated UH-60A blade against "
-                             "rotor speed", outputs=OUTPUTS)
+                             "rotor speed", outputs=OUTPUTS, version="2")

@@ -14,7 +14,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from solver.beams import BeamSet, arc_beam, section_loads, straight_beam, strain_matrices
+from solver.beams import (
+    CONDENSED_POINTS,
+    BeamSet,
+    arc_beam,
+    section_loads,
+    straight_beam,
+    strain_matrices,
+)
 from solver.model import Model
 from solver.sections import SectionTable
 from solver.system import System
@@ -51,21 +58,39 @@ def setup(name):
     return s, bs
 
 
-def dense_reference(system, beam, q, qr=None):
-    """Energy, strains (G, 6), gradient (E, 48), material stiffness Σ B(Q)ᵀ wC B(Q_r) and
-    geometric stiffness (Σ w S_k h_k) ⊗ I3 (E, 48, 48) from the dense h_k, point by point
-    in plain NumPy (no padding, no kernels)."""
+def condensed(beam) -> list[int]:
+    """The elements BeamSet condenses: those with more than CONDENSED_POINTS points of the
+    segmented 3-point rule (all straight here: the arc's elements have 3)."""
     quad = beam.quadrature(beam.stiffness_points)
+    counts = np.bincount(quad["element"], minlength=beam.n_elements)
+    return [e for e in range(beam.n_elements) if counts[e] > CONDENSED_POINTS]
+
+
+def dense_reference(system, beam, q, qr=None):
+    """Energy, strains at the kernels' points (G, 6), gradient (E, 48), material stiffness
+    Σ B(Q)ᵀ wC B(Q_r) and geometric stiffness (Σ w S_k h_k) ⊗ I3 (E, 48, 48) from the dense
+    h_k, point by point in plain NumPy (no padding, no kernels): on the segmented 3-point
+    rule, and on a condensed element by 8 Gauss points a segment (exact for its strain energy's
+    integrand, of degree 11 with piecewise-linear properties), the strains there at the 6
+    Gauss points of the element."""
+    quad = beam.quadrature(beam.stiffness_points)
+    fine = beam.quadrature(8)
+    dense = condensed(beam)
+    keep = ~np.isin(quad["element"], dense)
+    take = np.isin(fine["element"], dense)
+    quad = {k: np.concatenate([quad[k][keep], fine[k][take]]) for k in quad}
+    order = np.argsort(quad["element"], kind="stable")
+    quad = {k: v[order] for k, v in quad.items()}
     n, dn, wds = beam._geometry(quad)
     h = strain_matrices(n, dn)  # (G, 6, 16, 16)
     c = beam.sections.at(quad["s"])["stiffness"]
     idx = system.offset[beam] + 36 * quad["element"][:, None] + np.arange(48)
 
-    def vectors(qq):
-        return qq[idx].reshape(-1, 16, 3)
+    def vectors(qq, ix=idx):
+        return qq[ix].reshape(-1, 16, 3)
 
-    def strain(v):
-        return 0.5 * np.einsum("gkab,gac,gbc->gk", h, v, v)
+    def strain(v, hh=h):
+        return 0.5 * np.einsum("gkab,gac,gbc->gk", hh, v, v)
 
     v = vectors(q)
     e = strain(v) - strain(vectors(system.q0_raw))
@@ -80,7 +105,20 @@ def dense_reference(system, beam, q, qr=None):
         grad[el] += wds[g] * b[g].T @ stress[g]
         mat[el] += wds[g] * b[g].T @ c[g] @ br[g]
         geo[el] += np.kron(np.einsum("k,kab->ab", wds[g] * stress[g], h[g]), np.eye(3))
-    return energy, e, grad, mat, geo
+    # the strains at the kernels' points: the 3-point rule's, and on a condensed element its
+    # 6 Gauss points
+    pts = {k: v[keep] for k, v in beam.quadrature(beam.stiffness_points).items()}
+    xg = np.polynomial.legendre.leggauss(CONDENSED_POINTS)[0]
+    for el in dense:
+        add = {"element": np.full(len(xg), el), "xi": xg, "s": np.zeros(len(xg)),
+               "w": np.zeros(len(xg))}
+        pts = {k: np.concatenate([pts[k], add[k]]) for k in pts}
+    order = np.argsort(pts["element"], kind="stable")
+    pts = {k: v[order] for k, v in pts.items()}
+    hp = strain_matrices(*beam._geometry(pts)[:2])
+    ip = system.offset[beam] + 36 * pts["element"][:, None] + np.arange(48)
+    e_points = strain(vectors(q, ip), hp) - strain(vectors(system.q0_raw, ip), hp)
+    return energy, e_points, grad, mat, geo
 
 
 @pytest.mark.parametrize("name", MODELS)
@@ -94,6 +132,9 @@ def test_kernels_match_dense_strain_matrices(name):
     q = s.q0_raw + 0.05 * rng.normal(size=s.n)
     qr = q + 0.05 * rng.normal(size=s.n)
     energy, e, grad, mat, geo = dense_reference(s, beam, q)
+    # the stepped beam's last element (9 points of the 3-point rule) is condensed
+    assert list(np.flatnonzero(bs._dense)) == condensed(beam) == ([2] if name == "stepped"
+                                                                  else [])
     assert bs.potential(q) == pytest.approx(energy, rel=1e-13)
     # strains: the kernel's real slots, in the order of the quadrature; padding stays zero
     _, ek = bs._strains(q)
