@@ -145,6 +145,21 @@ def strains(qe: Array, n: Array, dn: Array, count: IArray, e0: Array) -> Array:
 
 
 @njit(cache=True)
+def _point_weighted_stress(wc: Array, dense: bool, e: Array, c: int, g: int,
+                           out: Array) -> None:
+    """out (6,) = T_g = Σ_h (w C)_gh (e_h − e0_h) of one element (``wc`` its (W, W, 6, 6)
+    weights, ``e`` its (W, 6) strains, ``c`` its real points): over every h on a ``dense``
+    element, over h = g alone otherwise."""
+    lo, hi = (0, c) if dense else (g, g + 1)
+    for k in range(6):
+        acc = 0.0
+        for h in range(lo, hi):
+            for m in range(6):
+                acc += wc[g, h, k, m] * e[h, m]
+        out[k] = acc
+
+
+@njit(cache=True)
 def weighted_stresses(wc: Array, dense: BArray, e: Array, count: IArray) -> Array:
     """T_g = Σ_h (w C)_gh (e_h − e0_h) (E, W, 6), N·m and N·m² (the stress resultants times
     their ds weight): on an element that is not ``dense`` (w C) is block-diagonal over its
@@ -152,15 +167,8 @@ def weighted_stresses(wc: Array, dense: BArray, e: Array, count: IArray) -> Arra
     :class:`solver.beams.BeamSet`) it couples them."""
     t = np.zeros(e.shape)
     for el in range(e.shape[0]):
-        c = count[el]
-        for g in range(c):
-            lo, hi = (0, c) if dense[el] else (g, g + 1)
-            for h in range(lo, hi):
-                for k in range(6):
-                    acc = 0.0
-                    for m in range(6):
-                        acc += wc[el, g, h, k, m] * e[el, h, m]
-                    t[el, g, k] += acc
+        for g in range(count[el]):
+            _point_weighted_stress(wc[el], dense[el], e[el], count[el], g, t[el, g])
     return t
 
 
@@ -222,14 +230,7 @@ def internal_force(qe: Array, n: Array, dn: Array, wc: Array, dense: BArray, cou
             _interpolate(qe[el], n[el, g], dn[el, g], u[g], v[g])
             _point_strains(u[g], v[g], e0[el, g], e[g])
         for g in range(c):
-            lo, hi = (0, c) if dense[el] else (g, g + 1)
-            ws[:] = 0.0
-            for h in range(lo, hi):
-                for k in range(6):
-                    acc = 0.0
-                    for m in range(6):
-                        acc += wc[el, g, h, k, m] * e[h, m]
-                    ws[k] += acc
+            _point_weighted_stress(wc[el], dense[el], e, c, g, ws)
             _add_point_force(n[el, g], dn[el, g], u[g], v[g], ws, fg, f[el])
     return f
 

@@ -346,15 +346,16 @@ class BeamSet(ElementSet):
             fine = None
             for e in range(b.n_elements):
                 at = quad["element"] == e
-                if b.stiffness_points >= 3 and at.sum() > CONDENSED_POINTS:
+                m = int(at.sum())
+                if b.stiffness_points >= 3 and m > CONDENSED_POINTS:
                     if fine is None:
                         fine = b.quadrature(CONDENSED_POINTS)
                     cond = self._condensed(b, e, fine)
                     if cond is not None:
                         points.append((*cond, True))
                         continue
-                wc = np.zeros((at.sum(), at.sum(), 6, 6))
-                wc[np.arange(at.sum()), np.arange(at.sum())] = wb[at, None, None] * cb[at]
+                wc = np.zeros((m, m, 6, 6))
+                wc[np.arange(m), np.arange(m)] = wb[at, None, None] * cb[at]
                 points.append((nb[at], dnb[at], wc, False))
         self.idx = np.concatenate(idx)  # (E, 48) global coordinates of each element
         n_el = len(points)
